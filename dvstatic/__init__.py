@@ -1,0 +1,39 @@
+"""dvstatic: plane stress-strain analysis with deformable (DV) and remeshing (RV)
+Voronoi lattice-spring models, solved implicitly and checked against finite elements.
+
+Public API::
+
+    import dvstatic as dv
+    mesh = dv.mesh.rectangle(1.0, 1.0, h=0.05, kind="jittered")
+    model = dv.DV(mesh, E=1e5, nu=0.2)
+    sol = dv.solve(model, [dv.Fix("left", x=0), dv.Fix("bottom", y=0)],
+                   [dv.Traction("right", (-1.0, 0.0))])
+"""
+
+from . import mesh
+from .linalg import SolverError
+from .loads import BodyForce, Fix, PointLoad, Traction
+from .mesh import Mesh
+from .models import DV, RV
+from .post import elastic_tensor, homogenize, plane_stress_tensor
+from .solvers import Solution, solve
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "mesh",
+    "Mesh",
+    "DV",
+    "RV",
+    "Fix",
+    "Traction",
+    "BodyForce",
+    "PointLoad",
+    "solve",
+    "Solution",
+    "SolverError",
+    "homogenize",
+    "elastic_tensor",
+    "plane_stress_tensor",
+    "__version__",
+]

@@ -1,0 +1,256 @@
+"""Linear solvers for lattice systems: constraint handling, direct and AMG solvers.
+
+Solver objects follow pyamg's pattern: build once (factorisation or AMG hierarchy),
+then ``solve(b)`` any number of times, each returning the solution and its residual
+history. Supports are imposed by symmetric elimination that keeps the 2x2 block
+structure: constrained rows and columns are replaced by a scaled identity and their
+coupling moved to the right-hand side.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+log = logging.getLogger(__name__)
+
+__all__ = [
+    "rigid_modes",
+    "check_restrained",
+    "ConstrainedSystem",
+    "DirectSolver",
+    "AMGSolver",
+    "SolverError",
+    "SOLVERS",
+]
+
+SOLVERS = ("auto", "direct", "amg")
+#: ``solver="auto"`` uses a sparse direct factorisation up to this many dofs, AMG above.
+AUTO_DIRECT_MAX_DOF = 200_000
+
+
+class SolverError(RuntimeError):
+    """A solve failed: singular system, non-finite result or no convergence.
+
+    Attributes
+    ----------
+    info : dict
+        What was tried (solver, iterations, residual history).
+    """
+
+    def __init__(self, message: str, info: dict | None = None):
+        super().__init__(message)
+        self.info = info or {}
+
+
+def rigid_modes(points: np.ndarray) -> np.ndarray:
+    """The three rigid-body modes on interleaved dofs, shape (2N, 3).
+
+    Columns: translation x, translation y, rotation about the centroid (scaled by
+    the mesh size so all three columns have comparable norms).
+    """
+    x = np.asarray(points, dtype=float)
+    c = x.mean(axis=0)
+    scale = max(float(np.max(np.ptp(x, axis=0))), np.finfo(float).tiny)
+    b = np.zeros((2 * len(x), 3))
+    b[0::2, 0] = 1.0
+    b[1::2, 1] = 1.0
+    b[0::2, 2] = -(x[:, 1] - c[1]) / scale
+    b[1::2, 2] = (x[:, 0] - c[0]) / scale
+    return b
+
+
+def check_restrained(points: np.ndarray, dofs: np.ndarray) -> None:
+    """Raise ValueError if the constrained dofs leave a rigid-body motion free."""
+    if dofs.size == 0:
+        raise ValueError(
+            "no supports: the body can translate and rotate freely; add Fix supports "
+            "that prevent rigid-body motion (e.g. Fix('left', x=0) and Fix('bottom', y=0))"
+        )
+    b = rigid_modes(points)[dofs]
+    _, s, vt = np.linalg.svd(b, full_matrices=True)
+    s = np.concatenate([s, np.zeros(3 - len(s))])
+    if s[-1] > 1e-8 * max(s[0], 1e-300):
+        return
+    tx, ty, w = vt[-1]
+    x = np.asarray(points)
+    c = x.mean(axis=0)
+    scale = float(np.max(np.ptp(x, axis=0)))
+    if abs(w) < 1e-8:
+        what = f"translation along ({tx:.3g}, {ty:.3g})"
+    else:
+        px, py = c[0] - ty * scale / w, c[1] + tx * scale / w
+        what = f"rotation about ({px:.4g}, {py:.4g})"
+    raise ValueError(
+        f"the supports do not prevent rigid-body motion ({what} is free; the system is "
+        "singular); add supports that restrain it"
+    )
+
+
+@dataclass
+class ConstrainedSystem:
+    """K with prescribed dofs eliminated symmetrically (block structure kept).
+
+    Parameters
+    ----------
+    K : scipy.sparse.bsr_matrix, shape (n, n), blocksize (2, 2)
+    dofs : ndarray of int
+        Constrained dofs.
+    """
+
+    K: sp.bsr_matrix
+    dofs: np.ndarray
+    A: sp.bsr_matrix = field(init=False)
+    diag_value: float = field(init=False)
+
+    def __post_init__(self) -> None:
+        K = self.K
+        n = K.shape[0]
+        mask = np.zeros(n, dtype=bool)
+        mask[self.dofs] = True
+        nb = K.shape[0] // 2
+        brow = np.repeat(np.arange(nb), np.diff(K.indptr))
+        data = K.data.copy()
+        rows = 2 * brow[:, None, None] + np.arange(2)[None, :, None]
+        cols = 2 * K.indices[:, None, None] + np.arange(2)[None, None, :]
+        kill = mask[rows] | mask[cols]
+        diag = K.diagonal()
+        free_diag = diag[~mask]
+        self.diag_value = float(np.mean(np.abs(free_diag))) if free_diag.size else 1.0
+        data[kill] = 0.0
+        is_diag_block = brow == K.indices
+        i = np.arange(2)
+        for c in range(2):
+            sel = is_diag_block & mask[2 * brow + c]
+            data[sel, i[c], i[c]] = self.diag_value
+        self.A = sp.bsr_matrix((data, K.indices, K.indptr), shape=K.shape)
+        self.mask = mask
+
+    def rhs(self, f: np.ndarray, values: np.ndarray) -> np.ndarray:
+        """Right-hand side for loads ``f`` (n,) and prescribed ``values`` (k,)."""
+        uc = np.zeros(self.K.shape[0])
+        uc[self.dofs] = values
+        b = f - self.K @ uc
+        b[self.dofs] = self.diag_value * values
+        return b
+
+
+class DirectSolver:
+    """Sparse LU factorisation (SuperLU) with a fill-reducing ordering.
+
+    With ``symmetric=True`` (the default; the lattice stiffness is symmetric)
+    SuperLU runs in symmetric mode with preference for diagonal pivots; when the
+    row and column permutations come out equal the factorisation is an LDL^T in
+    disguise and :attr:`negative_pivots` is the number of negative eigenvalues of
+    ``A`` (Sylvester's law of inertia), a free stability check.
+
+    Parameters
+    ----------
+    A : sparse matrix, shape (n, n)
+    symmetric : bool
+    order : ndarray of int, shape (n,), optional
+        Symmetric fill-reducing permutation (e.g. :func:`dvstatic.ordering.mesh_dof_order`);
+        without it SuperLU's minimum-degree ordering on ``A^T + A`` is used.
+    """
+
+    name = "direct"
+
+    def __init__(self, A: sp.spmatrix, symmetric: bool = True, order: np.ndarray | None = None):
+        t0 = time.perf_counter()
+        opts: dict = {"permc_spec": "MMD_AT_PLUS_A"}
+        if symmetric:
+            opts.update(diag_pivot_thresh=1e-3, options=dict(SymmetricMode=True))
+        self.order = order
+        Ap = sp.csr_matrix(A)
+        if order is not None:
+            Ap = Ap[order][:, order]
+            opts["permc_spec"] = "NATURAL"
+        try:
+            self.lu = spla.splu(sp.csc_matrix(Ap), **opts)
+        except RuntimeError as exc:
+            raise SolverError(
+                f"the stiffness matrix is singular ({exc}): the lattice has a mechanism "
+                "(a node or a part not held by bonds and supports) or is unstable for these "
+                "micro-parameters",
+                {"solver": "direct"},
+            ) from None
+        self.A = A
+        self.negative_pivots: int | None = None
+        if symmetric and np.array_equal(self.lu.perm_r, self.lu.perm_c):
+            self.negative_pivots = int(np.count_nonzero(self.lu.U.diagonal() < 0))
+        self.setup_seconds = time.perf_counter() - t0
+
+    def solve(self, b: np.ndarray, x0: np.ndarray | None = None, rtol: float | None = None):
+        """Solve ``A x = b``; returns ``x`` and ``{"iterations": 0, "residuals": [...]}``."""
+        if self.order is None:
+            x = self.lu.solve(b)
+        else:
+            x = np.empty_like(b)
+            x[self.order] = self.lu.solve(b[self.order])
+        nb = float(np.linalg.norm(b)) or 1.0
+        res = float(np.linalg.norm(self.A @ x - b)) / nb if np.all(np.isfinite(x)) else np.inf
+        return x, {"iterations": 0, "residuals": [res]}
+
+
+class AMGSolver:
+    """Smoothed-aggregation AMG (pyamg) with the rigid-body near-null space, as a
+    preconditioner for CG (symmetric) or GMRES (non-symmetric operators).
+
+    Parameters
+    ----------
+    A : sparse matrix, shape (n, n)
+        The operator used to build the hierarchy (symmetric positive definite).
+    B : ndarray, shape (n, 3)
+        Near-null space (rigid-body modes).
+    """
+
+    name = "amg"
+
+    def __init__(self, A: sp.spmatrix, B: np.ndarray, **options):
+        import pyamg
+
+        t0 = time.perf_counter()
+        opts = dict(
+            symmetry="hermitian",
+            max_coarse=500,
+            coarse_solver="splu",
+            strength=("symmetric", {"theta": 0.05}),
+            improve_candidates=None,
+        )
+        opts.update(options)
+        self.ml = pyamg.smoothed_aggregation_solver(A, B=B, **opts)
+        self.A = A
+        self.setup_seconds = time.perf_counter() - t0
+        log.debug(
+            "AMG hierarchy: %d levels, operator complexity %.2f, %.3f s",
+            len(self.ml.levels),
+            self.ml.operator_complexity(),
+            self.setup_seconds,
+        )
+
+    def solve(
+        self, b: np.ndarray, x0: np.ndarray | None = None, rtol: float = 1e-10, maxiter: int = 500
+    ):
+        """CG preconditioned by one V-cycle; stops at ``|r| <= rtol |b|``.
+
+        Returns ``x`` and ``{"iterations", "residuals"}`` (relative residual history).
+        """
+        res: list[float] = []
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            x = self.ml.solve(b, x0=x0, tol=rtol, maxiter=maxiter, accel="cg", residuals=res)
+        indefinite = any("ndefinite" in str(w.message) for w in caught)
+        nb = float(np.linalg.norm(b)) or 1.0
+        hist = [r / nb for r in res]
+        true = float(np.linalg.norm(self.A @ x - b)) / nb if np.all(np.isfinite(x)) else np.inf
+        if hist:
+            hist[-1] = true
+        else:
+            hist = [true]
+        return x, {"iterations": max(len(res) - 1, 0), "residuals": hist, "indefinite": indefinite}

@@ -1,0 +1,743 @@
+"""Triangle meshes: the :class:`Mesh` container, generators and perturbation.
+
+A mesh is a set of particles (``points``) and counter-clockwise ``triangles``; its
+edges are the bonds of the lattice. Bounded meshes carry named boundary ``parts``
+(boundary edges); periodic meshes (for homogenisation) carry a ``period`` and, for
+every triangle vertex, the periodic ``image`` it refers to.
+"""
+
+from __future__ import annotations
+
+import logging
+import types
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+from scipy.spatial import Delaunay
+
+from ._checks import check_int, check_positive, check_seed
+from .domain import Circle, Domain, Polygon, rectangle_domain
+
+log = logging.getLogger(__name__)
+
+__all__ = ["Mesh", "Topology", "rectangle", "periodic_square", "KINDS"]
+
+#: Mesh kinds understood by the generators.
+KINDS = ("lattice", "jittered", "random")
+
+SQRT3_2 = np.sqrt(3.0) / 2.0
+
+
+@dataclass(frozen=True, eq=False)
+class Topology:
+    """Edge structure of a triangulation (computed once per mesh).
+
+    Attributes
+    ----------
+    bonds : ndarray, shape (E, 2), int64
+        End nodes (O, A) of every bond (mesh edge), O < A for bounded meshes.
+    bond_image : ndarray, shape (E, 2), int64
+        Periodic image of A relative to O (zeros for bounded meshes); the bond
+        vector is ``points[A] + bond_image * period - points[O]``.
+    tri_bonds : ndarray, shape (M, 3), int64
+        Bond index of local edge k of each triangle; local edge k joins local
+        vertices k+1 and k+2 (mod 3) and is opposite vertex k.
+    bond_tris : ndarray, shape (E, 2), int64
+        The one or two triangles of each bond; -1 where a bond has one triangle.
+    bond_local : ndarray, shape (E, 2), int64
+        Local edge index of the bond in each of ``bond_tris`` (-1 where absent).
+    boundary_edges : ndarray, shape (m, 2), int64
+        Boundary edges oriented counter-clockwise around the domain.
+    """
+
+    bonds: np.ndarray
+    bond_image: np.ndarray
+    tri_bonds: np.ndarray
+    bond_tris: np.ndarray
+    bond_local: np.ndarray
+    boundary_edges: np.ndarray
+
+    @property
+    def n_tris_per_bond(self) -> np.ndarray:
+        """Number of triangles (1 or 2) of every bond, shape (E,)."""
+        return 1 + (self.bond_tris[:, 1] >= 0)
+
+
+@dataclass(frozen=True, eq=False)
+class Mesh:
+    """Validated triangle mesh.
+
+    Parameters
+    ----------
+    points : array_like, shape (N, 2)
+        Particle coordinates (length units).
+    triangles : array_like of int, shape (M, 3)
+        Vertex indices; re-ordered counter-clockwise on construction.
+    parts : mapping str -> array_like of int, shape (m, 2), optional
+        Named boundary parts as lists of boundary edges.
+    period : array_like, shape (2,), optional
+        Period lengths of a periodic mesh (points must lie in ``[0, period)``).
+    images : array_like of int, shape (M, 3, 2), optional
+        For periodic meshes, the periodic image of each triangle vertex: vertex
+        ``v`` of triangle ``t`` sits at ``points[triangles[t, v]] + images[t, v] * period``.
+    domain : Domain, optional
+        The domain the points were generated in (used to re-triangulate after
+        :meth:`perturbed`).
+
+    Raises
+    ------
+    ValueError
+        Non-finite coordinates, duplicate points, indices out of range, zero-area
+        triangles, unused points, edges shared by more than two triangles or
+        overlapping triangles, unknown or non-boundary part edges.
+    TypeError
+        Triangles given with a non-integer dtype.
+    """
+
+    points: np.ndarray
+    triangles: np.ndarray
+    parts: Mapping[str, np.ndarray] = field(default_factory=dict)
+    period: np.ndarray | None = None
+    images: np.ndarray | None = None
+    domain: Domain | None = None
+
+    def __post_init__(self) -> None:
+        p = _as_points(self.points)
+        _check_duplicates(p)
+        t = _as_triangles(self.triangles, len(p))
+        period, images = None, None
+        if (self.period is None) != (self.images is None):
+            raise ValueError("a periodic mesh needs both `period` and `images`")
+        if self.period is not None:
+            period = np.asarray(self.period, dtype=float).reshape(-1)
+            if period.shape != (2,) or not np.all(np.isfinite(period)) or np.any(period <= 0):
+                raise ValueError(f"period must be two positive finite lengths, got {self.period!r}")
+            images = np.asarray(self.images)
+            if images.shape != t.shape + (2,):
+                raise ValueError(f"images must have shape {t.shape + (2,)}, got {images.shape}")
+            if not np.issubdtype(images.dtype, np.integer):
+                raise TypeError(f"images must be integers, got dtype {images.dtype}")
+            images = images.astype(np.int64)
+            if np.any(np.abs(images) > 1):
+                raise ValueError("periodic images must be -1, 0 or 1")
+            if np.any(p < 0) or np.any(p >= period):
+                raise ValueError("points of a periodic mesh must lie in [0, period)")
+        x = p[t]
+        if images is not None:
+            x = x + images * period
+        a2 = _cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])
+        flip = a2 < 0
+        if flip.any():
+            t[flip] = t[flip][:, [0, 2, 1]]
+            if images is not None:
+                images[flip] = images[flip][:, [0, 2, 1]]
+            x[flip] = x[flip][:, [0, 2, 1]]
+            a2 = np.abs(a2)
+        e = np.stack([x[:, 2] - x[:, 1], x[:, 0] - x[:, 2], x[:, 1] - x[:, 0]], axis=1)
+        lmax2 = np.max(np.einsum("mki,mki->mk", e, e), axis=1)
+        degenerate = a2 <= 64 * np.finfo(float).eps * lmax2
+        if degenerate.any():
+            i = int(np.flatnonzero(degenerate)[0])
+            raise ValueError(
+                f"{int(degenerate.sum())} triangle(s) have zero area (first: triangle {i} with "
+                f"vertices {t[i].tolist()}); every triangle needs three non-collinear points"
+            )
+        if images is None and np.any(
+            (t[:, 0] == t[:, 1]) | (t[:, 1] == t[:, 2]) | (t[:, 0] == t[:, 2])
+        ):
+            raise ValueError("a triangle repeats a vertex index")
+        used = np.bincount(t.ravel(), minlength=len(p))
+        if np.any(used == 0):
+            bad = np.flatnonzero(used == 0)
+            raise ValueError(
+                f"{bad.size} point(s) are not used by any triangle (first: point {bad[0]}); "
+                "remove them or add triangles"
+            )
+        for arr in (p, t) + ((period, images) if images is not None else ()):
+            arr.setflags(write=False)
+        object.__setattr__(self, "points", p)
+        object.__setattr__(self, "triangles", t)
+        object.__setattr__(self, "period", period)
+        object.__setattr__(self, "images", images)
+        topo = self.topology  # validates edges (manifold, orientation)
+        object.__setattr__(self, "parts", types.MappingProxyType(self._checked_parts(topo)))
+
+    # ------------------------------------------------------------------ basics
+    @property
+    def n_points(self) -> int:
+        """Number of particles N."""
+        return len(self.points)
+
+    @property
+    def n_triangles(self) -> int:
+        """Number of triangles M."""
+        return len(self.triangles)
+
+    @property
+    def n_bonds(self) -> int:
+        """Number of bonds (mesh edges) E."""
+        return len(self.topology.bonds)
+
+    @property
+    def is_periodic(self) -> bool:
+        """True for periodic meshes."""
+        return self.period is not None
+
+    @cached_property
+    def topology(self) -> Topology:
+        """Bonds and their triangles (:class:`Topology`), computed once."""
+        return _topology(self.triangles, self.n_points, self.images)
+
+    def triangle_coordinates(self) -> np.ndarray:
+        """Vertex coordinates of every triangle, unwrapped for periodic meshes, (M, 3, 2)."""
+        x = self.points[self.triangles]
+        if self.images is not None:
+            x = x + self.images * self.period
+        return x
+
+    @cached_property
+    def triangle_areas(self) -> np.ndarray:
+        """Triangle areas, shape (M,)."""
+        x = self.triangle_coordinates()
+        a = 0.5 * _cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])
+        a.setflags(write=False)
+        return a
+
+    @property
+    def area(self) -> float:
+        """Total area of the mesh."""
+        return float(self.triangle_areas.sum())
+
+    @property
+    def boundary_edges(self) -> np.ndarray:
+        """Boundary edges, counter-clockwise, shape (m, 2) (empty for periodic meshes)."""
+        return self.topology.boundary_edges
+
+    @property
+    def boundary_nodes(self) -> np.ndarray:
+        """Sorted indices of boundary nodes."""
+        return np.unique(self.boundary_edges)
+
+    def bond_vectors(self) -> np.ndarray:
+        """Reference bond vectors A - O, shape (E, 2)."""
+        b = self.topology.bonds
+        d = self.points[b[:, 1]] - self.points[b[:, 0]]
+        if self.period is not None:
+            d = d + self.topology.bond_image * self.period
+        return d
+
+    def bond_lengths(self) -> np.ndarray:
+        """Reference bond lengths, shape (E,)."""
+        d = self.bond_vectors()
+        return np.hypot(d[:, 0], d[:, 1])
+
+    def edge_length_spread(self) -> float:
+        """sigma_L = std(l) / mean(l) over all bonds (the paper's mesh irregularity)."""
+        lengths = self.bond_lengths()
+        return float(np.std(lengths) / np.mean(lengths))
+
+    @property
+    def h(self) -> float:
+        """Mean bond length."""
+        return float(np.mean(self.bond_lengths()))
+
+    # ------------------------------------------------------------------ parts
+    def part_edges(self, name: str) -> np.ndarray:
+        """Boundary edges of the named part, shape (m, 2).
+
+        Raises
+        ------
+        ValueError
+            If the mesh has no part of that name (the message lists the names).
+        """
+        if not isinstance(name, str):
+            raise TypeError(f"part name must be a string, got {type(name).__name__}")
+        if name not in self.parts:
+            known = ", ".join(repr(k) for k in self.parts) or "none (this mesh has no named parts)"
+            raise ValueError(f"unknown boundary part {name!r}; known parts: {known}")
+        return self.parts[name]
+
+    def part_nodes(self, name: str) -> np.ndarray:
+        """Sorted node indices of the named boundary part."""
+        return np.unique(self.part_edges(name))
+
+    def _checked_parts(self, topo: Topology) -> dict[str, np.ndarray]:
+        out: dict[str, np.ndarray] = {}
+        if not self.parts:
+            return out
+        if self.is_periodic:
+            raise ValueError("periodic meshes have no boundary, so they cannot have parts")
+        be = topo.boundary_edges
+        n = self.n_points
+        fwd = be[:, 0] * n + be[:, 1]
+        order = np.argsort(fwd)
+        fwd_sorted = fwd[order]
+        for name, edges in self.parts.items():
+            e = np.asarray(edges)
+            if e.size == 0:
+                e = np.zeros((0, 2), np.int64)
+            if e.ndim != 2 or e.shape[1] != 2 or not np.issubdtype(e.dtype, np.integer):
+                raise ValueError(f"part {name!r} must be an (m, 2) integer array of edges")
+            e = e.astype(np.int64)
+            if np.any(e < 0) or np.any(e >= n):
+                raise ValueError(f"part {name!r} has node indices outside [0, {n})")
+            k1 = e[:, 0] * n + e[:, 1]
+            k2 = e[:, 1] * n + e[:, 0]
+            i1 = np.minimum(np.searchsorted(fwd_sorted, k1), len(fwd_sorted) - 1)
+            i2 = np.minimum(np.searchsorted(fwd_sorted, k2), len(fwd_sorted) - 1)
+            ok1 = fwd_sorted[i1] == k1 if len(fwd_sorted) else np.zeros(len(e), bool)
+            ok2 = fwd_sorted[i2] == k2 if len(fwd_sorted) else np.zeros(len(e), bool)
+            if not np.all(ok1 | ok2):
+                bad = e[~(ok1 | ok2)][0]
+                raise ValueError(
+                    f"part {name!r} contains {bad.tolist()}, which is not a boundary edge"
+                )
+            ccw = np.where(ok1[:, None], e, e[:, ::-1])
+            ccw.setflags(write=False)
+            out[str(name)] = ccw
+        return out
+
+    # ------------------------------------------------------------------ transforms
+    def perturbed(self, amplitude: float, seed: int | None = 0) -> Mesh:
+        """Randomly moved copy of the mesh (the paper's way to raise sigma_L).
+
+        Interior nodes move by a vector drawn uniformly from the disc of radius
+        ``amplitude``; boundary nodes slide along their straight side (or circle)
+        by up to ``amplitude``; polygon corners stay. Meshes generated in a domain
+        (and periodic meshes) are re-triangulated (Delaunay); other meshes keep
+        their triangles, and a move that would invert a triangle is an error.
+
+        Parameters
+        ----------
+        amplitude : float
+            Largest displacement of a node (length units), >= 0.
+        seed : int or None
+            Random seed.
+
+        Returns
+        -------
+        Mesh
+        """
+        amplitude = check_positive("amplitude", amplitude, allow_zero=True)
+        rng = np.random.default_rng(check_seed(seed))
+        p = np.array(self.points)
+        if amplitude == 0:
+            return self
+        if self.is_periodic:
+            p = np.mod(p + _disc(rng, len(p)) * amplitude, self.period)
+            p[p >= self.period] = 0.0
+            tri, images = _periodic_delaunay(p, self.period)
+            return Mesh(p, tri, period=self.period, images=images)
+        if self.domain is None:
+            bnd = self.boundary_nodes
+            inner = np.setdiff1d(np.arange(self.n_points), bnd)
+            p[inner] += _disc(rng, inner.size) * amplitude
+            try:
+                return Mesh(p, self.triangles, parts=dict(self.parts))
+            except ValueError as exc:
+                raise ValueError(
+                    f"perturbation of amplitude {amplitude} inverts triangles of this mesh "
+                    f"({exc}); use a smaller amplitude"
+                ) from None
+        tol = 1e-9 * self.h
+        p = _move_in_domain(self.domain, p, amplitude, rng, tol)
+        p, tri, parts = self.domain.triangulate(p, tol)
+        return Mesh(p, tri, parts=parts, domain=self.domain)
+
+    def __repr__(self) -> str:
+        kind = "periodic " if self.is_periodic else ""
+        parts = f", parts={list(self.parts)}" if self.parts else ""
+        return f"Mesh({kind}N={self.n_points}, triangles={self.n_triangles}{parts})"
+
+
+# ---------------------------------------------------------------------- generators
+def rectangle(
+    width: float = 1.0,
+    height: float = 1.0,
+    h: float = 0.1,
+    kind: str = "jittered",
+    jitter: float = 0.3,
+    seed: int | None = 0,
+) -> Mesh:
+    """Triangulated rectangle ``[0, width] x [0, height]``.
+
+    Parameters
+    ----------
+    width, height : float
+        Rectangle size (length units), > 0.
+    h : float
+        Target node spacing, 0 < h <= min(width, height).
+    kind : {"lattice", "jittered", "random"}
+        ``lattice``: regular triangular lattice (rows ``h sqrt(3)/2`` apart, exact
+        equilateral triangles when the size fits); ``jittered``: lattice nodes shifted
+        by up to ``jitter * h``, the shift tapering off within about one spacing of the
+        sides, where nodes slide along their side by up to ``jitter * h / 2``; ``random``:
+        uniformly distributed interior points (same density), boundary nodes at
+        spacing about ``h``.
+    jitter : float
+        Relative jitter for ``kind="jittered"``, in [0, 0.5).
+    seed : int or None
+        Random seed.
+
+    Returns
+    -------
+    Mesh
+        With parts ``"bottom"``, ``"right"``, ``"top"``, ``"left"``; boundary nodes lie
+        exactly on the sides.
+    """
+    width = check_positive("width", width)
+    height = check_positive("height", height)
+    h = check_positive("h", h)
+    if h > min(width, height):
+        raise ValueError(
+            f"h = {h} is larger than the domain (min(width, height) = {min(width, height)}); "
+            "use h <= min(width, height)"
+        )
+    kind = _check_kind(kind)
+    jitter = float(check_positive("jitter", jitter, allow_zero=True))
+    if jitter >= 0.5:
+        raise ValueError(f"jitter must be in [0, 0.5), got {jitter}")
+    rng = np.random.default_rng(check_seed(seed))
+    if kind == "random":
+        pts = _random_rectangle_points(width, height, h, rng)
+    else:
+        pts, boundary, side_dir, side_step = _lattice_points(width, height, h)
+        if kind == "jittered" and jitter > 0:
+            _jitter_rectangle(pts, boundary, side_dir, side_step, width, height, h, jitter, rng)
+    domain = rectangle_domain(width, height)
+    pts, tri, parts = domain.triangulate(pts, 1e-9 * h)
+    mesh = Mesh(pts, tri, parts=parts, domain=domain)
+    log.debug("rectangle %s: %r", kind, mesh)
+    return mesh
+
+
+def periodic_square(
+    n_points: int, kind: str = "random", seed: int | None = 0, jitter: float = 0.3
+) -> Mesh:
+    """Periodic triangulation of the unit square (a representative volume element).
+
+    Parameters
+    ----------
+    n_points : int
+        Approximate number of particles, >= 16 (exact for ``random``).
+    kind : {"random", "jittered", "lattice"}
+        ``lattice`` is a triangular lattice with ``nx`` columns and an even number of
+        rows (so it closes periodically; nearly equilateral), ``jittered`` the same
+        with shifts up to ``jitter`` times the spacing, ``random`` uniform points.
+    seed : int or None
+        Random seed.
+    jitter : float
+        Relative jitter for ``kind="jittered"``, in [0, 0.5).
+
+    Returns
+    -------
+    Mesh
+        Periodic mesh (``period = (1, 1)``); bonds across the period carry the image
+        shift in :attr:`Topology.bond_image`.
+    """
+    n_points = check_int("n_points", n_points, minimum=16)
+    kind = _check_kind(kind)
+    jitter = float(check_positive("jitter", jitter, allow_zero=True))
+    if jitter >= 0.5:
+        raise ValueError(f"jitter must be in [0, 0.5), got {jitter}")
+    rng = np.random.default_rng(check_seed(seed))
+    if kind == "random":
+        p = rng.random((n_points, 2))
+    else:
+        nx = max(4, int(round(np.sqrt(n_points * SQRT3_2))))
+        ny = max(4, 2 * int(round(nx / np.sqrt(3.0))))
+        j, i = np.divmod(np.arange(nx * ny), nx)
+        p = np.c_[(i + 0.5 * (j % 2) + 0.25) / nx, (j + 0.25) / ny]
+        if kind == "jittered" and jitter > 0:
+            p += _disc(rng, len(p)) * jitter / nx
+            p = np.mod(p, 1.0)
+    p[p >= 1.0] = 0.0
+    period = np.array([1.0, 1.0])
+    tri, images = _periodic_delaunay(p, period)
+    return Mesh(p, tri, period=period, images=images)
+
+
+# ---------------------------------------------------------------------- internals
+def _check_kind(kind: str) -> str:
+    if not isinstance(kind, str):
+        raise TypeError(f"kind must be a string, one of {KINDS}, got {type(kind).__name__}")
+    if kind not in KINDS:
+        raise ValueError(f"unknown mesh kind {kind!r}; accepted: {', '.join(KINDS)}")
+    return kind
+
+
+def _as_points(points) -> np.ndarray:
+    try:
+        p = np.array(points, dtype=float)
+    except (TypeError, ValueError):
+        raise TypeError("points must be a numeric array of shape (N, 2)") from None
+    if p.ndim != 2 or p.shape[1] != 2:
+        raise ValueError(f"points must have shape (N, 2), got {p.shape}")
+    if len(p) < 3:
+        raise ValueError(f"a mesh needs at least 3 points, got {len(p)}")
+    if not np.all(np.isfinite(p)):
+        bad = np.flatnonzero(~np.all(np.isfinite(p), axis=1))
+        raise ValueError(f"{bad.size} point(s) have non-finite coordinates (first: point {bad[0]})")
+    return p
+
+
+def _as_triangles(triangles, n: int) -> np.ndarray:
+    t = np.array(triangles)
+    if t.ndim != 2 or t.shape[1] != 3:
+        raise ValueError(f"triangles must have shape (M, 3), got {t.shape}")
+    if len(t) == 0:
+        raise ValueError("a mesh needs at least one triangle")
+    if not np.issubdtype(t.dtype, np.integer):
+        raise TypeError(f"triangles must be integer indices, got dtype {t.dtype}")
+    t = t.astype(np.int64)
+    if t.min() < 0 or t.max() >= n:
+        raise ValueError(f"triangle indices must be in [0, {n}), got range [{t.min()}, {t.max()}]")
+    return t
+
+
+def _check_duplicates(p: np.ndarray) -> None:
+    order = np.lexsort((p[:, 1], p[:, 0]))
+    q = p[order]
+    same = np.all(q[1:] == q[:-1], axis=1)
+    if same.any():
+        k = int(np.flatnonzero(same)[0])
+        i, j = sorted((int(order[k]), int(order[k + 1])))
+        raise ValueError(
+            f"{int(same.sum())} duplicate point(s) (first: points {i} and {j} at {p[i].tolist()})"
+        )
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+
+
+def _topology(tri: np.ndarray, n: int, images: np.ndarray | None) -> Topology:
+    """Bonds, triangle-bond incidence and boundary of a (periodic) triangulation."""
+    m = len(tri)
+    o = tri[:, [1, 2, 0]]
+    a = tri[:, [2, 0, 1]]
+    lo, hi = np.minimum(o, a), np.maximum(o, a)
+    key = lo * n + hi
+    if images is not None:
+        s = images[:, [2, 0, 1]] - images[:, [1, 2, 0]]  # image of a relative to o
+        s = np.where((o > a)[..., None], -s, s)
+        if np.any(np.abs(s) > 1):
+            raise ValueError("periodic triangle spans more than one period")
+        if np.any(o == a):
+            raise ValueError(
+                "a periodic triangle joins a point to its own image: too few points for a "
+                "periodic mesh"
+            )
+        key = key * 9 + (s[..., 0] + 1) * 3 + (s[..., 1] + 1)
+    uniq, inv, cnt = np.unique(key.ravel(), return_inverse=True, return_counts=True)
+    if cnt.max() > 2:
+        e = int(np.argmax(cnt))
+        raise ValueError(
+            f"{int(np.sum(cnt > 2))} edge(s) are shared by more than two triangles "
+            f"(first shared by {int(cnt[e])}); the triangles overlap"
+        )
+    sign = np.where(o < a, 1, -1).ravel()
+    balance = np.bincount(inv, weights=sign, minlength=len(uniq))
+    if np.any((cnt == 2) & (balance != 0)):
+        raise ValueError("two triangles share an edge with the same orientation: they overlap")
+    if images is not None and np.any(cnt != 2):
+        raise ValueError("a periodic triangulation must have every edge in exactly two triangles")
+    order = np.argsort(inv, kind="stable")
+    start = np.concatenate([[0], np.cumsum(cnt)[:-1]])
+    first = order[start]
+    second = np.where(cnt == 2, order[np.minimum(start + 1, len(order) - 1)], -1)
+    bond_tris = np.stack([first // 3, np.where(second >= 0, second // 3, -1)], axis=1)
+    bond_local = np.stack([first % 3, np.where(second >= 0, second % 3, -1)], axis=1)
+    tri_bonds = inv.reshape(m, 3).astype(np.int64)
+    if images is None:
+        bonds = np.stack([uniq // n, uniq % n], axis=1)
+        bond_image = np.zeros_like(bonds)
+    else:
+        pair = uniq // 9
+        code = uniq % 9
+        bonds = np.stack([pair // n, pair % n], axis=1)
+        bond_image = np.stack([code // 3 - 1, code % 3 - 1], axis=1)
+    ob, ab = o.ravel(), a.ravel()
+    bmask = np.flatnonzero(cnt[inv] == 1)
+    boundary = np.stack([ob[bmask], ab[bmask]], axis=1)
+    out = Topology(
+        bonds=bonds.astype(np.int64),
+        bond_image=bond_image.astype(np.int64),
+        tri_bonds=tri_bonds,
+        bond_tris=bond_tris.astype(np.int64),
+        bond_local=bond_local.astype(np.int64),
+        boundary_edges=boundary.astype(np.int64),
+    )
+    for arr in vars(out).values():
+        arr.setflags(write=False)
+    return out
+
+
+def _disc(rng: np.random.Generator, n: int) -> np.ndarray:
+    """n points uniformly distributed in the unit disc."""
+    r = np.sqrt(rng.random(n))
+    t = 2 * np.pi * rng.random(n)
+    return np.c_[r * np.cos(t), r * np.sin(t)]
+
+
+def _lattice_points(width: float, height: float, h: float):
+    """Triangular lattice filling the rectangle, boundary nodes on the sides.
+
+    Returns points, boundary mask, along-side direction (0 = x, 1 = y, -1 corner)
+    and the node spacing along that side.
+    """
+    nx = max(1, int(round(width / h)))
+    ny = max(1, int(round(height / (h * SQRT3_2))))
+    hx, hy = width / nx, height / ny
+    rows = []
+    for j in range(ny + 1):
+        y = height if j == ny else j * hy
+        if j % 2 == 0:
+            x = np.arange(nx + 1) * hx
+        else:
+            x = np.concatenate([[0.0], (np.arange(nx) + 0.5) * hx, [width]])
+        x[-1] = width
+        rows.append(np.c_[x, np.full(len(x), y)])
+    p = np.vstack(rows)
+    on_x = (p[:, 0] == 0) | (p[:, 0] == width)
+    on_y = (p[:, 1] == 0) | (p[:, 1] == height)
+    boundary = on_x | on_y
+    side_dir = np.full(len(p), -1)
+    side_dir[on_y & ~on_x] = 0
+    side_dir[on_x & ~on_y] = 1
+    side_step = np.where(side_dir == 0, hx, hy)
+    # on odd rows the x-sides get an extra node: spacing along them is hy
+    return p, boundary, side_dir, side_step
+
+
+def _jitter_rectangle(p, boundary, side_dir, side_step, width, height, h, jitter, rng) -> None:
+    """Shift lattice nodes: interior nodes in a disc of radius ``jitter * h``, tapered
+    to zero near the sides (ramp from 0.4 h to 1.2 h), boundary nodes along their side by
+    up to half that. The taper keeps the boundary cells well shaped: a boundary node
+    with two triangles and an obtuse angle makes the DV coupling there indefinite.
+    """
+    interior = ~boundary
+    d_wall = np.minimum.reduce([p[:, 0], width - p[:, 0], p[:, 1], height - p[:, 1]])
+    taper = np.clip((d_wall - 0.4 * h) / (0.8 * h), 0.0, 1.0)
+    shift = _disc(rng, len(p)) * (jitter * h * taper)[:, None]
+    p[interior] += shift[interior]
+    slide = (rng.random(len(p)) * 2 - 1) * 0.5 * jitter * side_step
+    for axis in (0, 1):
+        sel = boundary & (side_dir == axis)
+        p[sel, axis] += slide[sel]
+
+
+def _random_rectangle_points(width: float, height: float, h: float, rng) -> np.ndarray:
+    nbx = max(1, int(round(width / h)))
+    nby = max(1, int(round(height / h)))
+    xs = np.linspace(0.0, width, nbx + 1)
+    ys = np.linspace(0.0, height, nby + 1)
+    xs[-1], ys[-1] = width, height
+    bnd = np.vstack(
+        [
+            np.c_[xs, np.zeros_like(xs)],
+            np.c_[xs, np.full_like(xs, height)],
+            np.c_[np.zeros(nby - 1), ys[1:-1]],
+            np.c_[np.full(nby - 1, width), ys[1:-1]],
+        ]
+    )
+    n_int = max(0, int(round(width * height / (SQRT3_2 * h * h) - 0.5 * len(bnd))))
+    margin = 0.1 * h
+    inner = np.c_[
+        margin + (width - 2 * margin) * rng.random(n_int),
+        margin + (height - 2 * margin) * rng.random(n_int),
+    ]
+    return np.vstack([bnd, inner])
+
+
+def _periodic_delaunay(p: np.ndarray, period: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Delaunay triangulation of points in a periodic box.
+
+    Points are copied across the box sides within a margin, triangulated, and the
+    triangles whose centroid lies in the box are kept, each once.
+    """
+    n = len(p)
+    margin = min(1.0, 4.0 * np.sqrt(np.log(n + 2.0) / n))
+    while True:
+        offs = np.array([(i, j) for i in (-1, 0, 1) for j in (-1, 0, 1)])
+        allp, ids, img = [], [], []
+        for o in offs:
+            q = p + o * period
+            keep = np.all((q >= -margin * period) & (q < (1 + margin) * period), axis=1)
+            allp.append(q[keep])
+            ids.append(np.flatnonzero(keep))
+            img.append(np.broadcast_to(o, (int(keep.sum()), 2)))
+        allp = np.vstack(allp)
+        ids = np.concatenate(ids)
+        img = np.vstack(img)
+        tri = Delaunay(allp).simplices
+        c = allp[tri].mean(axis=1)
+        keep = np.all((c >= 0) & (c < period), axis=1)
+        tri = tri[keep]
+        x = allp[tri]
+        a2 = _cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])
+        tri[a2 < 0] = tri[a2 < 0][:, [0, 2, 1]]
+        area = 0.5 * np.abs(a2).sum()
+        ok = abs(area - period.prod()) <= 1e-9 * period.prod()
+        if ok:
+            try:
+                t, im = ids[tri], img[tri]
+                _topology(t, n, im)
+                return t, im
+            except ValueError:
+                ok = False
+        if margin >= 1.0:
+            raise ValueError("could not build a periodic triangulation of these points")
+        margin = min(1.0, 2 * margin)
+
+
+def _move_in_domain(domain: Domain, p: np.ndarray, amplitude: float, rng, tol: float) -> np.ndarray:
+    """Random moves keeping boundary nodes on their curve and corners fixed."""
+    p = p.copy()
+    dist, names = domain.curve_distances(p)
+    on = dist <= tol
+    n_on = on.sum(axis=1)
+    corners = domain.corners()
+    is_corner = n_on >= 2
+    if len(corners):
+        dc = np.min(
+            np.hypot(p[:, None, 0] - corners[None, :, 0], p[:, None, 1] - corners[None, :, 1]),
+            axis=1,
+        )
+        is_corner |= dc <= tol
+    curves = []
+    for loop in domain.loops:
+        if isinstance(loop, Polygon):
+            curves.extend(("seg", a, b) for _, a, b in loop.curves())
+        else:
+            curves.append(("circle", loop, None))
+    interior = n_on == 0
+    # boundary nodes: slide along their curve
+    for c, (kind, a, b) in enumerate(curves):
+        sel = np.flatnonzero(on[:, c] & ~is_corner & (n_on == 1))
+        if sel.size == 0:
+            continue
+        s = (rng.random(sel.size) * 2 - 1) * amplitude
+        if kind == "seg":
+            t = (b - a) / np.hypot(*(b - a))
+            length = np.hypot(*(b - a))
+            u = np.einsum("ij,j->i", p[sel] - a, t) + s
+            u = np.clip(u, 0.05 * amplitude, length - 0.05 * amplitude)
+            p[sel] = a + u[:, None] * t
+        else:
+            circ: Circle = a
+            cc = np.asarray(circ.center)
+            ang = np.arctan2(p[sel, 1] - cc[1], p[sel, 0] - cc[0]) + s / circ.radius
+            p[sel] = cc + circ.radius * np.c_[np.cos(ang), np.sin(ang)]
+    idx = np.flatnonzero(interior)
+    for _ in range(8):
+        if idx.size == 0:
+            break
+        trial = p[idx] + _disc(rng, idx.size) * amplitude
+        d, _ = domain.curve_distances(trial)
+        good = domain.contains(trial) & (d.min(axis=1) > 0.05 * amplitude)
+        p[idx[good]] = trial[good]
+        idx = idx[~good]
+    return p

@@ -1,0 +1,231 @@
+"""Static solves: :func:`solve` and the :class:`Solution` it returns."""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import geometry as _geometry
+from . import linalg
+from ._checks import check_choice, check_int, check_positive
+from .loads import constraints, load_vector
+from .models import VoronoiModel
+from .ordering import mesh_dof_order
+
+log = logging.getLogger(__name__)
+
+__all__ = ["Solution", "solve"]
+
+
+@dataclass(frozen=True, eq=False)
+class Solution:
+    """Result of :func:`solve`.
+
+    Attributes
+    ----------
+    model : DV or RV
+    u : ndarray, shape (N, 2)
+        Nodal displacements (length units).
+    reactions : ndarray, shape (N, 2)
+        Support reactions (force per unit thickness), non-zero at constrained dofs:
+        the force the supports exert on the body.
+    info : dict
+        ``solver`` ("direct" | "amg"), ``converged``, ``iterations``, ``residuals``
+        (relative residual history), ``residual`` (final relative equilibrium
+        residual), ``seconds`` per stage (geometry, assembly, setup, solve, total),
+        ``reused`` (stages taken from a cache), ``n_dof``, ``n_constrained``.
+    supports, loads : list
+        What was solved.
+    """
+
+    model: VoronoiModel
+    u: np.ndarray
+    reactions: np.ndarray
+    info: dict
+    supports: list = field(default_factory=list)
+    loads: list = field(default_factory=list)
+
+    @property
+    def max_displacement(self) -> float:
+        """Largest nodal displacement magnitude."""
+        return float(np.max(np.hypot(self.u[:, 0], self.u[:, 1])))
+
+    def tension(self) -> np.ndarray:
+        """Bond tensions, shape (E,) (linearised for a linear solve)."""
+        if self.info.get("nonlinear"):
+            return self.model.bond_tension(self.u)
+        return self.model.linear_tension(self.u)
+
+    def stress(self) -> np.ndarray:
+        """Per-node virial stress over the Voronoi cells, shape (N, 2, 2)."""
+        from .post import node_stress
+
+        return node_stress(self.model, self.u, linear=not self.info.get("nonlinear", False))
+
+    def energy(self) -> float:
+        """Strain energy ``u.K.u / 2`` of the linear model (energy per unit thickness)."""
+        from .post import energy
+
+        return energy(self.model, self.u)
+
+
+def solve(
+    model: VoronoiModel,
+    supports=None,
+    loads=None,
+    *,
+    solver: str = "auto",
+    rtol: float = 1e-10,
+    maxiter: int = 1000,
+) -> Solution:
+    """Solve the linear static problem ``K u = f`` with prescribed displacements.
+
+    Parameters
+    ----------
+    model : DV or RV
+    supports : Fix or list of Fix
+        Must prevent all rigid-body motion.
+    loads : Traction, BodyForce, PointLoad or a list of them
+    solver : {"auto", "direct", "amg"}
+        ``direct``: sparse LU (SuperLU, MMD ordering); ``amg``: CG preconditioned by
+        smoothed-aggregation AMG with the rigid-body modes; ``auto``: direct up to
+        :data:`dvstatic.linalg.AUTO_DIRECT_MAX_DOF` dofs, AMG above.
+    rtol : float
+        AMG stopping tolerance on the residual relative to the right-hand side,
+        in (0, 1).
+    maxiter : int
+        AMG iteration limit.
+
+    Returns
+    -------
+    Solution
+
+    Raises
+    ------
+    ValueError
+        Bad input, or supports that leave a rigid-body motion free.
+    SolverError
+        The system is singular (a lattice mechanism) or AMG did not converge; the
+        error carries what was tried in ``.info``.
+    """
+    if not isinstance(model, VoronoiModel):
+        raise TypeError(f"model must be a dvstatic DV or RV model, got {type(model).__name__}")
+    check_choice("solver", solver, linalg.SOLVERS)
+    rtol = check_positive("rtol", rtol)
+    if rtol >= 1:
+        raise ValueError(f"rtol must be in (0, 1), got {rtol}")
+    maxiter = check_int("maxiter", maxiter, minimum=1)
+    mesh = model.mesh
+    if mesh.is_periodic:
+        raise ValueError("solve() needs a bounded mesh; use homogenize() on periodic meshes")
+    t_start = time.perf_counter()
+    seconds: dict[str, float] = {}
+    reused: list[str] = []
+
+    supports_l = (
+        list(supports)
+        if isinstance(supports, (list, tuple))
+        else ([] if supports is None else [supports])
+    )
+    loads_l = (
+        list(loads) if isinstance(loads, (list, tuple)) else ([] if loads is None else [loads])
+    )
+    dofs, values = constraints(mesh, supports_l)
+    linalg.check_restrained(mesh.points, dofs)
+    f = load_vector(mesh, loads_l)
+
+    t0 = time.perf_counter()
+    if _geometry.is_cached(mesh):
+        reused.append("geometry")
+        seconds["geometry"] = 0.0
+    else:
+        _geometry.of(mesh)
+        seconds["geometry"] = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    if "_stiffness_bsr" in model.__dict__:
+        reused.append("assembly")
+    K = model._stiffness_bsr
+    seconds["assembly"] = time.perf_counter() - t0
+
+    n = K.shape[0]
+    kind = solver
+    if kind == "auto":
+        kind = "direct" if n <= linalg.AUTO_DIRECT_MAX_DOF else "amg"
+    t0 = time.perf_counter()
+    system = linalg.ConstrainedSystem(K, dofs)
+    b = system.rhs(f, values)
+    if kind == "direct":
+        engine = linalg.DirectSolver(system.A, order=mesh_dof_order(mesh))
+    else:
+        engine = linalg.AMGSolver(system.A, linalg.rigid_modes(mesh.points))
+    seconds["setup"] = time.perf_counter() - t0
+
+    if kind == "direct" and engine.negative_pivots:
+        raise linalg.SolverError(
+            _unstable_message(model, engine.negative_pivots),
+            {"solver": kind, "negative_pivots": engine.negative_pivots},
+        )
+    t0 = time.perf_counter()
+    if kind == "direct":
+        x, sinfo = engine.solve(b)
+    else:
+        x, sinfo = engine.solve(b, rtol=rtol, maxiter=maxiter)
+    seconds["solve"] = time.perf_counter() - t0
+
+    info = {
+        "solver": kind,
+        "nonlinear": False,
+        "n_dof": n,
+        "n_constrained": int(dofs.size),
+        "iterations": sinfo["iterations"],
+        "residuals": sinfo["residuals"],
+    }
+    if sinfo.get("indefinite"):
+        info["converged"] = False
+        raise linalg.SolverError(_unstable_message(model, None), info)
+    residual = sinfo["residuals"][-1]
+    limit = 1e-8 if kind == "direct" else max(10 * rtol, 1e-14)
+    if not np.all(np.isfinite(x)) or not residual <= limit:
+        info["converged"] = False
+        reason = (
+            "a non-finite result"
+            if not np.all(np.isfinite(x))
+            else (f"relative residual {residual:.3e} > {limit:.1e}")
+        )
+        raise linalg.SolverError(
+            f"{kind} solve failed with {reason} after {sinfo['iterations']} iteration(s): the "
+            "system is singular or badly conditioned (lattice mechanism or unstable "
+            "micro-parameters)" + ("; try solver='direct'" if kind == "amg" else ""),
+            info,
+        )
+    u = x.reshape(-1, 2)
+    r_full = K @ x - f
+    reactions = np.zeros(n)
+    reactions[dofs] = r_full[dofs]
+    seconds["total"] = time.perf_counter() - t_start
+    info.update(converged=True, residual=residual, seconds=seconds, reused=reused)
+    log.info(
+        "%s %s solve: %d dof, %d iterations, residual %.2e, %.3f s",
+        model.kind,
+        kind,
+        n,
+        info["iterations"],
+        residual,
+        seconds["total"],
+    )
+    return Solution(model, u, reactions.reshape(-1, 2), info, supports_l, loads_l)
+
+
+def _unstable_message(model: VoronoiModel, count: int | None) -> str:
+    what = f"{count} negative eigenvalue(s)" if count else "a negative curvature direction"
+    return (
+        f"the {model.kind} stiffness with these supports is not positive definite ({what}): "
+        f"the lattice is unstable for nu = {model.nu} (nu_m = {model.nu_m:.4g}) on this mesh, "
+        "so its equilibrium would not be a physical solution. Irregular meshes (obtuse "
+        "triangles) shrink the stable nu range, DV more than RV; use a more regular mesh "
+        "(lattice or jittered with less jitter), or the RV model"
+    )
