@@ -63,11 +63,23 @@ def _build(mesh: Mesh) -> BlockPattern:
     nb = len(o)
     rows = np.concatenate([o, a, np.arange(n)])
     cols = np.concatenate([a, o, np.arange(n)])
-    key = rows * n + cols
-    uniq, inv = np.unique(key, return_inverse=True)
-    indices = (uniq % n).astype(np.int32)
-    counts = np.bincount(uniq // n, minlength=n)
-    indptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int32)
+    if mesh.is_periodic:
+        # two bonds may join the same pair of particles through different images
+        key = rows * n + cols
+        uniq, inv = np.unique(key, return_inverse=True)
+        indices = (uniq % n).astype(np.int32)
+        counts = np.bincount(uniq // n, minlength=n)
+        indptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int32)
+    else:
+        # pairs are unique: let scipy's O(nnz) COO->CSR conversion do the sorting and
+        # carry each entry's position through the data array
+        c = sp.coo_matrix(
+            (np.arange(1, len(rows) + 1, dtype=np.float64), (rows, cols)), shape=(n, n)
+        ).tocsr()
+        c.sort_indices()
+        inv = np.empty(len(rows), dtype=np.int64)
+        inv[c.data.astype(np.int64) - 1] = np.arange(len(rows))
+        indices, indptr = c.indices.astype(np.int32), c.indptr.astype(np.int32)
     pos_oa, pos_ao, diag = inv[:nb], inv[nb : 2 * nb], inv[2 * nb :]
     tri = mesh.triangles
     m = len(tri)
@@ -109,8 +121,11 @@ def accumulate(pat: BlockPattern, ke: np.ndarray, data: np.ndarray, sl: slice) -
     m = ke.shape[0]
     blocks = ke.reshape(m, 3, 2, 3, 2).transpose(0, 1, 3, 2, 4).reshape(m * 9, 4)
     idx = pat.tri_block[sl.start * 9 : sl.start * 9 + m * 9]
+    # spatially ordered meshes touch a narrow band of blocks per chunk
+    lo, hi = int(idx.min()), int(idx.max()) + 1
+    local = idx - lo
     for c in range(4):
-        data[:, c] += np.bincount(idx, weights=blocks[:, c], minlength=pat.nnzb)
+        data[lo:hi, c] += np.bincount(local, weights=blocks[:, c], minlength=hi - lo)
 
 
 def triangle_dofs(mesh: Mesh) -> np.ndarray:

@@ -298,7 +298,9 @@ class Domain:
         lmax2 = np.max(np.einsum("mki,mki->mk", e, e), axis=1)
         flat = a2 <= 1e-10 * lmax2
         keep = ~flat & self.contains(x.mean(axis=1))
-        return tri[keep]
+        tri = tri[keep]
+        # triangles in order of their first particle (spatial locality for assembly)
+        return tri[np.argsort(tri.min(axis=1), kind="stable")]
 
     def curve_names(self) -> list[str]:
         """Name of every curve (polygon edge or circle), in curve order."""

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .kinematics import barycentric, circumcentres, half_sides
+from .kinematics import edge_frames
 from .mesh import Mesh
 
 log = logging.getLogger(__name__)
@@ -91,11 +91,15 @@ def _compute(mesh: Mesh) -> Geometry:
     n_nodes = mesh.n_points
     x = mesh.triangle_coordinates()
     tri_area = np.asarray(mesh.triangle_areas)
-    cc = circumcentres(x)
-    bary = barycentric(x, cc)
-    tri_r, _ = half_sides(x, bary)
-    d = x[:, [2, 0, 1]] - x[:, [1, 2, 0]]
-    tri_l = np.hypot(d[..., 0], d[..., 1])
+    d, tri_l, _ = edge_frames(x)  # local edge k from vertex k+1 to k+2
+    # angle at vertex k between the edges to k+1 (= d[k+2]) and k+2 (= -d[k+1])
+    cos_num = -np.einsum("mki,mki->mk", d[:, [2, 0, 1]], d[:, [1, 2, 0]])
+    tri_r = 0.5 * tri_l * cos_num / (2.0 * tri_area)[:, None]  # (l/2) cot(theta)
+    # barycentric coordinates of the circumcentre: l_k^2 (l_k+1^2 + l_k+2^2 - l_k^2)
+    l2 = tri_l**2
+    wts = l2 * (l2.sum(axis=1, keepdims=True) - 2.0 * l2)
+    bary = wts / wts.sum(axis=1, keepdims=True)
+    cc = np.einsum("mv,mvi->mi", bary, x)
     ntri = topo.n_tris_per_bond
     tri_weight = 1.0 / ntri[topo.tri_bonds]
 
@@ -112,7 +116,10 @@ def _compute(mesh: Mesh) -> Geometry:
     b = topo.bonds
     lr4 = 0.25 * length * r
     cell = np.bincount(b[:, 0], lr4, n_nodes) + np.bincount(b[:, 1], lr4, n_nodes)
-    dual = np.bincount(mesh.triangles.ravel(), np.repeat(tri_area / 3.0, 3), n_nodes)
+    dual = np.zeros(n_nodes)
+    for v in range(3):
+        dual += np.bincount(mesh.triangles[:, v], tri_area, n_nodes)
+    dual /= 3.0
     g = Geometry(
         x_tri=x,
         tri_area=tri_area,

@@ -157,6 +157,9 @@ class Mesh:
             )
         for arr in (p, t) + ((period, images) if images is not None else ()):
             arr.setflags(write=False)
+        areas = 0.5 * a2
+        areas.setflags(write=False)
+        self.__dict__["triangle_areas"] = areas  # cached_property slot, computed here
         object.__setattr__(self, "points", p)
         object.__setattr__(self, "triangles", t)
         object.__setattr__(self, "period", period)
@@ -406,6 +409,7 @@ def rectangle(
         pts, boundary, side_dir, side_step = _lattice_points(width, height, h)
         if kind == "jittered" and jitter > 0:
             _jitter_rectangle(pts, boundary, side_dir, side_step, width, height, h, jitter, rng)
+    pts = pts[spatial_order(pts)]
     domain = rectangle_domain(width, height)
     pts, tri, parts = domain.triangulate(pts, 1e-9 * h)
     mesh = Mesh(pts, tri, parts=parts, domain=domain)
@@ -454,12 +458,34 @@ def periodic_square(
             p += _disc(rng, len(p)) * jitter / nx
             p = np.mod(p, 1.0)
     p[p >= 1.0] = 0.0
+    p = p[spatial_order(p)]
     period = np.array([1.0, 1.0])
     tri, images = _periodic_delaunay(p, period)
     return Mesh(p, tri, period=period, images=images)
 
 
 # ---------------------------------------------------------------------- internals
+def spatial_order(points: np.ndarray) -> np.ndarray:
+    """Permutation that sorts points along a Morton (Z-order) curve.
+
+    Neighbouring particles get nearby indices, which narrows the band of the
+    stiffness matrix touched by each assembly chunk and improves cache use in
+    matrix-vector products and AMG.
+    """
+    lo = points.min(axis=0)
+    span = max(float(np.max(np.ptp(points, axis=0))), np.finfo(float).tiny)
+    q = np.minimum(((points - lo) / span * 65535.0).astype(np.uint64), 65535)
+
+    def spread(v: np.ndarray) -> np.ndarray:
+        v = (v | (v << np.uint64(8))) & np.uint64(0x00FF00FF)
+        v = (v | (v << np.uint64(4))) & np.uint64(0x0F0F0F0F)
+        v = (v | (v << np.uint64(2))) & np.uint64(0x33333333)
+        return (v | (v << np.uint64(1))) & np.uint64(0x55555555)
+
+    key = spread(q[:, 0]) | (spread(q[:, 1]) << np.uint64(1))
+    return np.argsort(key, kind="stable")
+
+
 def _check_kind(kind: str) -> str:
     if not isinstance(kind, str):
         raise TypeError(f"kind must be a string, one of {KINDS}, got {type(kind).__name__}")
@@ -685,7 +711,8 @@ def _periodic_delaunay(p: np.ndarray, period: np.ndarray) -> tuple[np.ndarray, n
             try:
                 t, im = ids[tri], img[tri]
                 _topology(t, n, im)
-                return t, im
+                order = np.argsort(t.min(axis=1), kind="stable")
+                return t[order], im[order]
             except ValueError:
                 ok = False
         if margin >= 1.0:
