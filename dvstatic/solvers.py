@@ -13,6 +13,7 @@ from . import linalg
 from ._checks import check_choice, check_int, check_positive
 from .loads import constraints, load_vector
 from .models import VoronoiModel
+from .newton import NewtonOptions, _residual, solve_nonlinear
 from .ordering import mesh_dof_order
 
 log = logging.getLogger(__name__)
@@ -80,8 +81,15 @@ def solve(
     solver: str = "auto",
     rtol: float = 1e-10,
     maxiter: int = 1000,
+    nonlinear: bool = False,
+    steps: int = 10,
+    newton_rtol: float = 1e-8,
+    max_iter: int = 25,
+    max_cutbacks: int = 8,
+    line_search: bool = True,
+    allow_unstable: bool = False,
 ) -> Solution:
-    """Solve the linear static problem ``K u = f`` with prescribed displacements.
+    """Solve the static problem: linear ``K u = f``, or geometrically exact equilibrium.
 
     Parameters
     ----------
@@ -98,6 +106,27 @@ def solve(
         in (0, 1).
     maxiter : int
         AMG iteration limit.
+    nonlinear : bool
+        Solve ``internal_force(u) = f`` on the current geometry (large displacements
+        and rotations) by Newton iterations with load stepping instead of the linear
+        system.
+    steps : int
+        Nonlinear: initial number of load steps (loads and prescribed displacements
+        are scaled together); a step that fails is halved and retried, a step that
+        converges fast lets the next grow back.
+    newton_rtol : float
+        Nonlinear: residual tolerance relative to the applied load (or, with only
+        prescribed displacements, to the reactions), with an absolute floor of
+        ``1e-10 k_n l_mean sqrt(n_dof)``; the increment must also be small.
+    max_iter : int
+        Nonlinear: Newton iterations per step before the step is cut back.
+    max_cutbacks : int
+        Nonlinear: how many times a step may be halved in total before giving up.
+    line_search : bool
+        Nonlinear: backtracking line search on the residual norm.
+    allow_unstable : bool
+        Nonlinear with the direct solver: accept converged states whose tangent has
+        negative pivots (otherwise they raise: buckling or a limit point).
 
     Returns
     -------
@@ -108,15 +137,15 @@ def solve(
     ValueError
         Bad input, or supports that leave a rigid-body motion free.
     SolverError
-        The system is singular (a lattice mechanism) or AMG did not converge; the
-        error carries what was tried in ``.info``.
+        The system is singular (a lattice mechanism), not positive definite (an
+        unstable lattice or, nonlinear, a buckled or limit state), AMG did not
+        converge, or a load step could not be completed after cut-backs; the error
+        says which and carries what was tried in ``.info``.
     """
     if not isinstance(model, VoronoiModel):
         raise TypeError(f"model must be a dvstatic DV or RV model, got {type(model).__name__}")
     check_choice("solver", solver, linalg.SOLVERS)
-    rtol = check_positive("rtol", rtol)
-    if rtol >= 1:
-        raise ValueError(f"rtol must be in (0, 1), got {rtol}")
+    rtol = _unit_interval("rtol", rtol)
     maxiter = check_int("maxiter", maxiter, minimum=1)
     mesh = model.mesh
     if mesh.is_periodic:
@@ -155,6 +184,37 @@ def solve(
     kind = solver
     if kind == "auto":
         kind = "direct" if n <= linalg.AUTO_DIRECT_MAX_DOF else "amg"
+    if nonlinear:
+        opts = NewtonOptions(
+            steps=check_int("steps", steps, minimum=1),
+            rtol=_unit_interval("newton_rtol", newton_rtol),
+            max_iter=check_int("max_iter", max_iter, minimum=1),
+            max_cutbacks=check_int("max_cutbacks", max_cutbacks, minimum=0),
+            line_search=bool(line_search),
+            solver=kind,
+            allow_unstable=bool(allow_unstable),
+        )
+        t0 = time.perf_counter()
+        x, ninfo = solve_nonlinear(model, dofs, values, f, opts)
+        seconds["solve"] = time.perf_counter() - t0
+        state, _ = _residual(model, x, f, dofs)
+        r_full = state[1]
+        u = x.reshape(-1, 2)
+        reactions = np.zeros(n)
+        reactions[dofs] = r_full[dofs]
+        seconds["total"] = time.perf_counter() - t_start
+        info = {
+            "solver": kind,
+            "nonlinear": True,
+            "n_dof": n,
+            "n_constrained": int(dofs.size),
+            "converged": True,
+            "seconds": seconds,
+            "reused": reused,
+        }
+        info.update(ninfo)
+        info["residuals"] = [s for st in ninfo["steps"] for s in st["residuals"]]
+        return Solution(model, u, reactions.reshape(-1, 2), info, supports_l, loads_l)
     t0 = time.perf_counter()
     system = linalg.ConstrainedSystem(K, dofs)
     b = system.rhs(f, values)
@@ -229,3 +289,10 @@ def _unstable_message(model: VoronoiModel, count: int | None) -> str:
         "triangles) shrink the stable nu range, DV more than RV; use a more regular mesh "
         "(lattice or jittered with less jitter), or the RV model"
     )
+
+
+def _unit_interval(name: str, value) -> float:
+    v = check_positive(name, value)
+    if v >= 1:
+        raise ValueError(f"{name} must be in (0, 1), got {v}")
+    return v
