@@ -10,7 +10,8 @@ Public API::
                    [dv.Traction("right", (-1.0, 0.0))])
 """
 
-from . import mesh
+from . import fem, mesh
+from .fem import compare
 from .linalg import SolverError
 from .loads import BodyForce, Fix, PointLoad, Traction
 from .mesh import Mesh
@@ -22,6 +23,8 @@ __version__ = "0.1.0"
 
 __all__ = [
     "mesh",
+    "fem",
+    "compare",
     "Mesh",
     "DV",
     "RV",

@@ -1,0 +1,286 @@
+"""Plane-stress finite-element reference (scikit-fem) on the lattice's own triangles.
+
+``solve(mesh, E, nu, supports, loads, order=1 | 2, refine=0)`` takes the same
+:class:`~dvstatic.Fix`, :class:`~dvstatic.Traction`, :class:`~dvstatic.BodyForce` and
+:class:`~dvstatic.PointLoad` objects as :func:`dvstatic.solve`, builds P1 or P2
+vector elements on the mesh triangles (uniformly refined ``refine`` times for a
+reference solution), and returns the displacement at the lattice nodes (they stay
+vertices of the refined mesh) together with a way to evaluate it anywhere.
+
+Supports and loads on named parts act on the whole boundary segment (every refined
+facet on it); supports and point loads on node index arrays act on those nodes only.
+Tractions are integrated exactly along the facets, body forces over the elements.
+
+scikit-fem is imported on first use only.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from ._checks import check_int, check_positive, check_real
+from .linalg import DirectSolver, SolverError
+from .loads import BodyForce, Fix, PointLoad, Traction, as_list, select_edges, select_nodes
+from .mesh import Mesh
+from .ordering import nested_dissection
+
+log = logging.getLogger(__name__)
+
+__all__ = ["lame_plane_stress", "FESolution", "solve", "Comparison", "compare"]
+
+
+def lame_plane_stress(E: float, nu: float) -> tuple[float, float]:
+    """Plane-stress Lame constants ``lambda* = E nu / (1 - nu^2)``, ``mu = E / (2 (1 + nu))``.
+
+    (scikit-fem's ``lame_parameters`` returns the plane-strain / 3-D ``lambda``.)
+    """
+    E = check_positive("E", E)
+    nu = check_real("nu", nu)
+    if not -1.0 < nu < 1.0:
+        raise ValueError(f"nu must lie in -1 < nu < 1 for plane stress, got {nu}")
+    return E * nu / (1.0 - nu**2), E / (2.0 * (1.0 + nu))
+
+
+@dataclass(frozen=True, eq=False)
+class FESolution:
+    """Finite-element solution.
+
+    Attributes
+    ----------
+    mesh : Mesh
+        The lattice mesh the problem was posed on.
+    u : ndarray, shape (N, 2)
+        Displacement at the lattice nodes.
+    order, refine : int
+    info : dict
+        ``n_dof``, ``n_elements``, ``seconds`` per stage (mesh, assembly, solve).
+    """
+
+    mesh: Mesh
+    u: np.ndarray
+    order: int
+    refine: int
+    info: dict
+    _basis: object
+    _x: np.ndarray
+
+    def evaluate(self, points) -> np.ndarray:
+        """Displacement at arbitrary points inside the mesh, shape (n, 2)."""
+        p = np.atleast_2d(np.asarray(points, dtype=float))
+        if p.ndim != 2 or p.shape[1] != 2:
+            raise ValueError(f"points must have shape (n, 2), got {p.shape}")
+        probe = self._basis.probes(np.ascontiguousarray(p.T))
+        v = probe @ self._x
+        n = len(p)
+        return np.c_[v[:n], v[n:]]
+
+    @property
+    def max_displacement(self) -> float:
+        return float(np.max(np.hypot(self.u[:, 0], self.u[:, 1])))
+
+
+def _facets_on_edges(fm, coarse_pts: np.ndarray, edges: np.ndarray) -> np.ndarray:
+    """Boundary facets of the refined skfem mesh lying on the given coarse edges."""
+    bf = fm.boundary_facets()
+    a = fm.p[:, fm.facets[0, bf]].T
+    b = fm.p[:, fm.facets[1, bf]].T
+    mid = 0.5 * (a + b)
+    p0 = coarse_pts[edges[:, 0]]
+    p1 = coarse_pts[edges[:, 1]]
+    d = p1 - p0
+    dd = np.einsum("ij,ij->i", d, d)
+    tol = 1e-9 * np.sqrt(dd.max())
+    keep = np.zeros(len(bf), dtype=bool)
+    # chunk over coarse edges to bound memory (facets x edges)
+    for start in range(0, len(edges), 2048):
+        sl = slice(start, start + 2048)
+        q = mid[:, None, :] - p0[None, sl, :]
+        s = np.einsum("nej,ej->ne", q, d[sl]) / dd[None, sl]
+        off = q - s[..., None] * d[None, sl, :]
+        on = (np.hypot(off[..., 0], off[..., 1]) <= tol) & (s >= -1e-12) & (s <= 1 + 1e-12)
+        keep |= on.any(axis=1)
+    return bf[keep]
+
+
+def solve(
+    mesh: Mesh,
+    E: float,
+    nu: float,
+    supports=None,
+    loads=None,
+    order: int = 1,
+    refine: int = 0,
+) -> FESolution:
+    """Plane-stress FE solution with the lattice's supports and loads.
+
+    Parameters
+    ----------
+    mesh : Mesh
+        Bounded mesh; its triangles are the elements (refined ``refine`` times).
+    E, nu : float
+        Young's modulus (> 0) and Poisson's ratio (-1 < nu < 1).
+    supports, loads
+        As for :func:`dvstatic.solve`.
+    order : {1, 2}
+        Lagrange element order.
+    refine : int
+        Uniform refinements (each splits a triangle into four), >= 0.
+
+    Returns
+    -------
+    FESolution
+    """
+    import skfem
+    from skfem.models.elasticity import linear_elasticity
+
+    if not isinstance(mesh, Mesh):
+        raise TypeError(f"mesh must be a dvstatic Mesh, got {type(mesh).__name__}")
+    if mesh.is_periodic:
+        raise ValueError("the FE reference needs a bounded mesh")
+    lam, mu = lame_plane_stress(E, nu)
+    order = check_int("order", order, minimum=1, maximum=2)
+    refine = check_int("refine", refine, minimum=0, maximum=8)
+    t0 = time.perf_counter()
+    fm = skfem.MeshTri(np.ascontiguousarray(mesh.points.T), np.ascontiguousarray(mesh.triangles.T))
+    if refine:
+        fm = fm.refined(refine)
+    elem = skfem.ElementVector(skfem.ElementTriP1() if order == 1 else skfem.ElementTriP2())
+    basis = skfem.Basis(fm, elem)
+    t1 = time.perf_counter()
+    K = skfem.asm(linear_elasticity(lam, mu), basis)
+    f = np.zeros(basis.N)
+    nodal = basis.nodal_dofs  # (2, n_vertices)
+    for load in as_list(loads, "Traction, BodyForce or PointLoad"):
+        if isinstance(load, Traction):
+            edges = select_edges(mesh, load.where, "Traction")
+            facets = _facets_on_edges(fm, mesh.points, edges)
+            fb = skfem.FacetBasis(fm, elem, facets=facets)
+            t = np.asarray(load.value, dtype=float)
+
+            @skfem.LinearForm
+            def traction(v, w, t=t):
+                return t[0] * v[0] + t[1] * v[1]
+
+            f += skfem.asm(traction, fb)
+        elif isinstance(load, BodyForce):
+            bvec = np.asarray(load.value, dtype=float)
+
+            @skfem.LinearForm
+            def body(v, w, bvec=bvec):
+                return bvec[0] * v[0] + bvec[1] * v[1]
+
+            f += skfem.asm(body, basis)
+        elif isinstance(load, PointLoad):
+            nodes = select_nodes(mesh, load.nodes, "PointLoad")
+            for c in range(2):
+                np.add.at(f, nodal[c, nodes], load.value[c])
+        else:
+            raise TypeError(f"unknown load type {type(load).__name__}")
+    dof_list, val_list = [], []
+    for s in as_list(supports, "Fix"):
+        if not isinstance(s, Fix):
+            raise TypeError(f"supports must be Fix objects, got {type(s).__name__}")
+        if isinstance(s.where, str):
+            facets = _facets_on_edges(fm, mesh.points, mesh.part_edges(s.where))
+            dofs = basis.get_dofs(facets=facets)
+            comps = {"u^1": s.x, "u^2": s.y}
+            for name, value in comps.items():
+                if value is None:
+                    continue
+                if np.ndim(value) != 0:
+                    raise ValueError(
+                        "FE reference: a prescribed value on a named part must be a scalar "
+                        "(per-node values are supported on node index arrays)"
+                    )
+                idx = np.asarray(dofs.all(name), dtype=np.int64)
+                dof_list.append(idx)
+                val_list.append(np.full(idx.size, float(value)))
+        else:
+            nodes = select_nodes(mesh, s.where, "Fix")
+            for c, value in ((0, s.x), (1, s.y)):
+                if value is None:
+                    continue
+                v = np.broadcast_to(np.asarray(value, dtype=float), nodes.shape)
+                dof_list.append(nodal[c, nodes])
+                val_list.append(np.asarray(v))
+    if not dof_list:
+        raise ValueError("no supports: the FE problem is singular")
+    D = np.concatenate(dof_list)
+    vals = np.concatenate(val_list)
+    D, first = np.unique(D, return_index=True)
+    vals = vals[first]
+    x = np.zeros(basis.N)
+    x[D] = vals
+    A, b, x_free, free = skfem.condense(K, f, x=x, D=D)
+    t2 = time.perf_counter()
+    x_free = _solve_spd(A, b, basis.doflocs[:, free].T)
+    x[free] = x_free
+    t3 = time.perf_counter()
+    u = np.c_[x[nodal[0, : mesh.n_points]], x[nodal[1, : mesh.n_points]]]
+    info = {
+        "n_dof": int(basis.N),
+        "n_elements": int(fm.t.shape[1]),
+        "seconds": {"mesh": t1 - t0, "assembly": t2 - t1, "solve": t3 - t2, "total": t3 - t0},
+    }
+    log.info("FE P%d refine=%d: %d dof in %.3f s", order, refine, basis.N, t3 - t0)
+    return FESolution(mesh, u, order, refine, info, basis, x)
+
+
+def _solve_spd(A: sp.spmatrix, b: np.ndarray, locs: np.ndarray) -> np.ndarray:
+    """Direct solve with a nested-dissection ordering on the dof locations."""
+    A = sp.csr_matrix(A)
+    coo = sp.triu(A, k=1).tocoo()
+    order = nested_dissection(locs + 1e-12 * np.arange(len(locs))[:, None], np.c_[coo.row, coo.col])
+    lu = DirectSolver(A, order=order)
+    if lu.negative_pivots:
+        raise SolverError("the FE stiffness is not positive definite: check the supports")
+    x, info = lu.solve(b)
+    if not np.all(np.isfinite(x)) or info["residuals"][-1] > 1e-8:
+        raise SolverError(f"FE solve failed (relative residual {info['residuals'][-1]:.2e})")
+    return x
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """Difference between two displacement fields on the same nodes.
+
+    Attributes
+    ----------
+    l2 : float
+        ``|u_a - u_b| / |u_b|`` over all nodes (discrete l2).
+    max : float
+        ``max_i |u_a,i - u_b,i| / max_i |u_b,i|`` (nodal vector magnitudes).
+    diff : ndarray, shape (N, 2)
+        ``u_a - u_b``.
+    """
+
+    l2: float
+    max: float
+    diff: np.ndarray
+
+
+def compare(a, b) -> Comparison:
+    """Relative L2 and max displacement errors of ``a`` against the reference ``b``.
+
+    ``a`` and ``b`` are solutions (anything with ``.u``) or (N, 2) arrays on the same
+    nodes.
+    """
+    ua = np.asarray(getattr(a, "u", a), dtype=float)
+    ub = np.asarray(getattr(b, "u", b), dtype=float)
+    if ua.shape != ub.shape or ua.ndim != 2 or ua.shape[1] != 2:
+        raise ValueError(
+            f"compare needs two (N, 2) fields on the same nodes, got {ua.shape} and {ub.shape}"
+        )
+    d = ua - ub
+    nb = float(np.linalg.norm(ub))
+    mb = float(np.max(np.hypot(ub[:, 0], ub[:, 1])))
+    if nb == 0:
+        raise ValueError("the reference field is zero: relative errors are undefined")
+    return Comparison(
+        float(np.linalg.norm(d) / nb), float(np.max(np.hypot(d[:, 0], d[:, 1])) / mb), d
+    )

@@ -1,0 +1,91 @@
+"""scikit-fem plane-stress reference: closed forms, convergence, the paper's beam."""
+
+import numpy as np
+import pytest
+
+import dvstatic as dv
+from conftest import E_BEAM, NU, uniaxial_exact, uniaxial_problem
+from dvstatic import fem
+from dvstatic.post import interpolate
+
+
+def test_lame_plane_stress_closed_form():
+    lam, mu = fem.lame_plane_stress(2.0e5, 0.3)
+    assert lam == pytest.approx(2.0e5 * 0.3 / (1 - 0.09), rel=1e-15)
+    assert mu == pytest.approx(2.0e5 / 2.6, rel=1e-15)
+    # plane stress: uniaxial sigma_xx gives sigma_yy = 0 with these constants
+    E, nu = 2.0e5, 0.3
+    exx, eyy = 1.0 / E, -nu / E
+    sxx = lam * (exx + eyy) + 2 * mu * exx
+    syy = lam * (exx + eyy) + 2 * mu * eyy
+    assert sxx == pytest.approx(1.0, rel=1e-14)
+    assert abs(syy) <= 1e-15
+
+
+@pytest.mark.parametrize("order", [1, 2])
+@pytest.mark.parametrize("refine", [0, 1])
+def test_fe_reproduces_uniaxial_field(order, refine):
+    m = dv.mesh.rectangle(1.0, 1.0, 0.1, kind="jittered", seed=1)
+    sup, ld = uniaxial_problem()
+    sol = fem.solve(m, E_BEAM, NU, sup, ld, order=order, refine=refine)
+    exact = uniaxial_exact(m.points)
+    assert np.abs(sol.u - exact).max() <= 1e-10 * np.abs(exact).max()
+    pts = np.array([[0.33, 0.71], [0.9, 0.05]])
+    np.testing.assert_allclose(sol.evaluate(pts), uniaxial_exact(pts), rtol=1e-10, atol=1e-16)
+
+
+@pytest.fixture(scope="module")
+def beam_ref():
+    mesh = dv.mesh.rectangle(4.0, 1.0, 0.1, kind="lattice")
+    sup = [dv.Fix("left"), dv.Fix("right")]
+    ld = [dv.BodyForce((0.0, -1.0))]
+    refs = {r: fem.solve(mesh, E_BEAM, NU, sup, ld, order=2, refine=r) for r in (1, 2)}
+    return refs, sup, ld
+
+
+def test_p2_beam_reference_converges(beam_ref):
+    refs, _, _ = beam_ref
+    w = {r: refs[r].evaluate([[2.0, 0.5]])[0, 1] for r in refs}
+    assert abs(w[2] / w[1] - 1) < 0.005
+    # Timoshenko estimate for a clamped-clamped beam, uniform load q = 1:
+    # q L^4 / (384 E I) + q L^2 / (8 kappa G A), within 2 % (2-D end effects)
+    E, nu, L, H = E_BEAM, NU, 4.0, 1.0
+    w_t = L**4 / (384 * E * H**3 / 12) + L**2 / (8 * (5 / 6) * E / (2 * (1 + nu)) * H)
+    assert -w[2] == pytest.approx(w_t, rel=0.02)
+
+
+@pytest.mark.parametrize("cls", [dv.DV, dv.RV])
+def test_lattice_beam_against_fe(beam_ref, cls):
+    refs, sup, ld = beam_ref
+    w_ref = refs[2].evaluate([[2.0, 0.5]])[0, 1]
+    errs = []
+    for h in (0.05, 0.025):
+        m = dv.mesh.rectangle(4.0, 1.0, h, kind="lattice")
+        sol = dv.solve(cls(m, E_BEAM, NU), sup, ld)
+        w = interpolate(m, sol.u, [[2.0, 0.5]])[0, 1]
+        errs.append(abs(w / w_ref - 1))
+    assert errs[1] < 0.03
+    assert errs[1] < errs[0]
+
+
+def test_fe_point_loads_and_node_supports():
+    m = dv.mesh.rectangle(2.0, 1.0, 0.25, kind="lattice")
+    left = m.part_nodes("left")
+    tip = int(np.argmax(m.points[:, 0] + m.points[:, 1]))
+    sup = [dv.Fix(left)]
+    ld = [dv.PointLoad([tip], (0.0, -1.0))]
+    a = fem.solve(m, E_BEAM, NU, sup, ld, order=1)
+    b = dv.solve(dv.RV(m, E_BEAM, NU), sup, ld)
+    assert a.u[tip, 1] < 0 and b.u[tip, 1] < 0
+    assert dv.compare(b, a).l2 < 0.5  # same order of magnitude on a coarse mesh
+
+
+def test_compare():
+    a = np.array([[1.0, 0.0], [0.0, 2.0]])
+    b = np.array([[1.0, 0.0], [0.0, 1.0]])
+    c = dv.compare(a, b)
+    assert c.l2 == pytest.approx(1 / np.sqrt(2))
+    assert c.max == pytest.approx(1.0)
+    np.testing.assert_array_equal(c.diff, a - b)
+    with pytest.raises(ValueError, match="same nodes"):
+        dv.compare(a, b[:1])

@@ -1,0 +1,83 @@
+"""Every validation script runs in --quick mode; its JSON holds the asserted numbers."""
+
+import importlib.util
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+VALIDATION = Path(__file__).resolve().parents[1] / "validation"
+
+
+def _run(name, out, *args):
+    sys.path.insert(0, str(VALIDATION))
+    try:
+        spec = importlib.util.spec_from_file_location(name, VALIDATION / f"{name}.py")
+        mod = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(mod)
+        assert mod.main(["--quick", "--out", str(out), *args]) == 0
+    finally:
+        sys.path.remove(str(VALIDATION))
+
+
+@pytest.fixture(scope="module")
+def out(tmp_path_factory):
+    return tmp_path_factory.mktemp("validation")
+
+
+def _json(out, fig):
+    assert (out / f"{fig}.png").stat().st_size > 1000
+    return json.loads((out / f"{fig}.json").read_text())
+
+
+def test_fig04(out):
+    _run("fig04_modulus_vs_strain", out)
+    d = _json(out, "fig04")
+    s = np.abs(d["strain"])
+    for kind in ("DV", "RV"):
+        err = np.abs(d["models"][kind]["relative_error"])
+        assert np.all(err[s <= 1e-3] < 0.015)  # small strain: the affine calibration
+        assert err[np.argmax(s)] > err[np.argmin(s)]  # grows with strain
+
+
+@pytest.mark.parametrize(
+    "fig,script,key",
+    [("fig05", "fig05_c1111_vs_nu", "C1111"), ("fig06", "fig06_c1122_vs_nu", "C1122")],
+)
+def test_fig05_fig06(out, fig, script, key):
+    _run(script, out)
+    d = _json(out, fig)
+    assert d["n_points"] >= 20000
+    for kind in ("DV", "RV"):
+        assert np.all(np.abs(d["models"][kind][f"{key}_rel_error"]) < 0.015)
+
+
+def test_fig07_fig08(out):
+    _run("fig07_beam_setup", out)
+    assert _json(out, "fig07")["length"] == 4.0
+    _run("fig08_beam_dv", out)
+    d = _json(out, "fig08")
+    assert d["midspan_uy"] < 0
+
+
+def test_fig09(out):
+    _run("fig09_beam_lines", out)
+    d = _json(out, "fig09")
+    for kind in ("DV", "RV"):
+        assert abs(d["midspan"][f"{kind}_rel_error"]) < 0.06  # h = 0.05 in quick mode
+        assert d["lines"]["mid"][f"{kind}_rel_error_uy"] < 0.06
+
+
+def test_fig10(out):
+    _run("fig10_error_vs_sigma", out)
+    d = _json(out, "fig10")
+    summ = d["summary"]
+    sig = [s["sigma_L_mean"] for s in summ]
+    assert np.all(np.diff(sig) > 0)
+    rv = [s["RV_mean"] for s in summ]
+    assert np.all(np.diff(rv) > 0)  # error grows with sigma_L
+    assert rv[-1] > 3 * rv[0]
+    dv_stable = [s["DV_mean"] for s in summ if s["DV_mean"] is not None]
+    assert dv_stable[-1] > 3 * dv_stable[0]
