@@ -1,15 +1,31 @@
-"""Command line: ``dvstatic demo`` and ``dvstatic --version``."""
+"""Command line.
+
+::
+
+    dvstatic run SCENE [--out DIR] [--set key=value ...] [--overwrite] [--quiet]
+    dvstatic validate [--quick] [--only fig05,fig10] [--dir validation] [--out DIR]
+    dvstatic bench [--quick] [--dir validation]
+    dvstatic demo
+    dvstatic --version
+
+Exit codes: 0 success, 2 bad input (scene, arguments, files), 3 the solver refused or
+failed (unstable lattice, no convergence), 130 interrupted.
+"""
 
 from __future__ import annotations
 
 import argparse
 import logging
+import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
 from . import __version__
+
+log = logging.getLogger("dvstatic")
 
 
 def _demo(args: argparse.Namespace) -> int:
@@ -47,11 +63,247 @@ def _demo(args: argparse.Namespace) -> int:
     return 0
 
 
+def _show_progress(args) -> bool:
+    return not args.quiet and sys.stderr.isatty()
+
+
+def _run(args: argparse.Namespace) -> int:
+    import dvstatic as dv
+    from dvstatic import io, scene
+
+    sc = scene.load(args.scene, args.set or ())
+    out_dir = Path(args.out) if args.out else Path(f"{sc.name}-out")
+    if out_dir.exists() and any(out_dir.iterdir()) and not args.overwrite:
+        raise scene.SceneError(
+            sc.path,
+            "",
+            f"output folder {out_dir} exists and is not empty; "
+            "pass --overwrite to replace its files or choose --out",
+        )
+    t0 = time.perf_counter()
+    mesh = sc.build_mesh()
+    model = sc.build_model(mesh)
+    supports = sc.build_supports(mesh)
+    loads = sc.build_loads(mesh)
+    try:
+        sol = dv.solve(model, supports, loads, progress=_show_progress(args), **sc.solve_options())
+    except ValueError as exc:  # e.g. supports that leave a rigid motion free
+        raise scene.SceneError(sc.path, "supports", str(exc)) from None
+    o = sc.data["output"]
+    fe = None
+    if o["fe_compare"]:
+        mat = sc.data["material"]
+        fe = dv.fem.solve(
+            mesh, mat["E"], mat["nu"], supports, loads, order=o["fe_order"], refine=o["fe_refine"]
+        )
+    out_dir.mkdir(parents=True, exist_ok=True)
+    written: list[Path] = []
+    try:
+        if o["vtu"]:
+            written.append(io.write_vtu(out_dir / f"{sc.name}.vtu", sol))
+        if o["png"]:
+            written.append(
+                io.write_png(
+                    out_dir / f"{sc.name}.png",
+                    sol,
+                    field=o["field"],
+                    scale=o["scale"],
+                    title=sc.data["title"] or None,
+                    stress=o["stress"],
+                )
+            )
+        for i, name in enumerate(o["part_stress"]):
+            if name not in mesh.parts:
+                raise scene.SceneError(
+                    sc.path,
+                    f"output.part_stress[{i}]",
+                    f"unknown boundary part {name!r}; known parts: "
+                    + ", ".join(repr(k) for k in mesh.parts),
+                )
+        data = io.summary(sol, fe=fe, probes=o["probes"] or None, part_stress=o["part_stress"])
+        data["scene"] = {
+            "file": str(sc.path),
+            "title": sc.data["title"],
+            "overrides": list(args.set or ()),
+        }
+        data["seconds_total"] = time.perf_counter() - t0
+        if o["json"]:
+            written.append(io.write_json(out_dir / f"{sc.name}.json", data))
+    except BaseException:
+        if written:
+            print(
+                "written before the interruption: " + ", ".join(map(str, written)), file=sys.stderr
+            )
+        raise
+    _print_summary(sc, data, written)
+    return 0
+
+
+def _print_summary(sc, d: dict, written: list[Path]) -> None:
+    m, md, s = d["mesh"], d["model"], d["solver"]
+    rows = [
+        ("scene", f"{sc.path}" + (f"  ({sc.data['title']})" if sc.data["title"] else "")),
+        ("mesh", f"{m['nodes']} nodes, {m['bonds']} bonds, sigma_L = {m['sigma_L']:.4f}"),
+        (
+            "model",
+            f"{md['type']} E = {md['E']:g}, nu = {md['nu']:g}: k_n = {md['k_n']:.6g}, "
+            f"nu_m = {md['nu_m']:.6g}",
+        ),
+        (
+            "solver",
+            f"{s['solver']}{' (nonlinear)' if s.get('nonlinear') else ''}, "
+            f"{s['iterations']} iterations, residual {s['residual']:.2e}, "
+            f"{s['seconds']['total']:.3f} s",
+        ),
+        ("max |u|", f"{d['max_displacement']:.6e}"),
+    ]
+    if "strain_energy" in d:
+        rows.append(("energy", f"{d['strain_energy']:.6e}"))
+    for key, r in d["reactions"].items():
+        rows.append((f"reaction {key}", f"({r[0]:.6g}, {r[1]:.6g})"))
+    if "fe" in d:
+        f = d["fe"]
+        rows.append(
+            (
+                f"FE P{f['order']} x{f['refine']}",
+                f"{f['n_dof']} dof: relative L2 difference {f['rel_l2_difference']:.3%}, "
+                f"max {f['rel_max_difference']:.3%}",
+            )
+        )
+    if "probes" in d:
+        pr = d["probes"]
+        for i, p in enumerate(pr["points"]):
+            u, st = pr["displacement"][i], pr["stress"][i]
+            rows.append(
+                (
+                    f"probe ({p[0]:g}, {p[1]:g})",
+                    f"u = ({u[0]:.6e}, {u[1]:.6e}), "
+                    f"s = ({st[0][0]:.4g}, {st[1][1]:.4g}, {st[0][1]:.4g})",
+                )
+            )
+            if "fe_displacement" in pr:
+                fu, fs = pr["fe_displacement"][i], pr["fe_stress"][i]
+                rows.append(
+                    (
+                        "  FE",
+                        f"u = ({fu[0]:.6e}, {fu[1]:.6e}), "
+                        f"s = ({fs[0][0]:.4g}, {fs[1][1]:.4g}, {fs[0][1]:.4g})",
+                    )
+                )
+    for name, rec in d.get("part_stress", {}).items():
+        lat, ls = rec["lattice"], rec["lattice_strain"]
+        txt = (
+            f"max sxx {lat['max_sxx']:.4g} (virial), {ls['max_sxx']:.4g} (strain), "
+            f"max syy {lat['max_syy']:.4g}, max principal {lat['max_principal']:.4g}"
+        )
+        if "fe" in rec:
+            fe_ = rec["fe"]
+            txt += f" (FE {fe_['max_sxx']:.4g}, {fe_['max_syy']:.4g}, {fe_['max_principal']:.4g})"
+        rows.append((f"stress on {name}", txt))
+    rows.append(("files", ", ".join(str(w) for w in written) or "none"))
+    width = max(len(k) for k, _ in rows)
+    for k, v in rows:
+        print(f"{k:>{width}}  {v}")
+
+
+def _scripts_dir(arg: str | None) -> Path:
+    cands = (
+        [Path(arg)]
+        if arg
+        else [Path.cwd() / "validation", Path(__file__).resolve().parents[1] / "validation"]
+    )
+    for c in cands:
+        if (c / "_common.py").is_file():
+            return c
+    raise FileNotFoundError(
+        "validation scripts not found (looked in " + ", ".join(map(str, cands)) + "); run "
+        "from a source checkout of dvstatic or pass --dir path/to/validation"
+    )
+
+
+def _run_scripts(names: list[Path], extra: list[str], args) -> int:
+    from tqdm import tqdm
+
+    failed = []
+    bar = tqdm(names, desc="scripts", unit="script", disable=not _show_progress(args))
+    for path in bar:
+        bar.set_postfix_str(path.stem)
+        proc = subprocess.run(
+            [sys.executable, str(path), *extra], capture_output=True, text=True, check=False
+        )
+        tqdm.write(proc.stdout.rstrip()) if not args.quiet else None
+        if proc.returncode != 0:
+            failed.append(path.stem)
+            tqdm.write(f"FAILED {path.stem}:\n{proc.stderr.rstrip()}")
+    if failed:
+        print(f"{len(failed)} script(s) failed: {', '.join(failed)}", file=sys.stderr)
+        return 3
+    return 0
+
+
+def _validate(args: argparse.Namespace) -> int:
+    d = _scripts_dir(args.dir)
+    scripts = sorted(d.glob("fig[0-9][0-9]_*.py")) + [d / "elastica.py"]
+    if args.only:
+        want = [w.strip() for w in args.only.split(",") if w.strip()]
+        known = {p.stem.split("_")[0]: p for p in scripts}
+        known.update({p.stem: p for p in scripts})
+        bad = [w for w in want if w not in known]
+        if bad:
+            raise ValueError(
+                f"--only: unknown script(s) {', '.join(bad)}; accepted: "
+                f"{', '.join(sorted(k for k in known if '_' not in k))}"
+            )
+        scripts = [known[w] for w in want]
+    extra = ["--quick"] if args.quick else []
+    if args.out:
+        extra += ["--out", str(args.out)]
+    return _run_scripts(scripts, extra, args)
+
+
+def _bench(args: argparse.Namespace) -> int:
+    d = _scripts_dir(args.dir)
+    scripts = sorted(d.glob("bench_*.py"))
+    return _run_scripts(scripts, ["--quick"] if args.quick else [], args)
+
+
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="dvstatic", description=__doc__)
+    parser = argparse.ArgumentParser(
+        prog="dvstatic", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     parser.add_argument("--version", action="version", version=f"dvstatic {__version__}")
-    parser.add_argument("-v", "--verbose", action="store_true", help="log progress")
+    parser.add_argument("-v", "--verbose", action="store_true", help="log progress details")
     sub = parser.add_subparsers(dest="command")
+
+    p_run = sub.add_parser("run", help="solve a scene file and write its outputs")
+    p_run.add_argument("scene", help="scene file (TOML), see docs/scenes.md")
+    p_run.add_argument("--out", help="output folder (default: <scene name>-out)")
+    p_run.add_argument(
+        "--set",
+        action="append",
+        metavar="KEY=VALUE",
+        help="override a scene value, e.g. --set mesh.h=0.05 (repeatable)",
+    )
+    p_run.add_argument(
+        "--overwrite", action="store_true", help="write into an existing, non-empty output folder"
+    )
+    p_run.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
+    p_run.set_defaults(func=_run)
+
+    p_val = sub.add_parser("validate", help="run the validation scripts (paper figures 4-10)")
+    p_val.add_argument("--quick", action="store_true", help="CI sizes (seconds each)")
+    p_val.add_argument("--only", help="comma-separated list, e.g. fig05,fig10,elastica")
+    p_val.add_argument("--dir", help="folder of the validation scripts")
+    p_val.add_argument("--out", help="output folder (default: validation/out)")
+    p_val.add_argument("-q", "--quiet", action="store_true", help="no progress, no tables")
+    p_val.set_defaults(func=_validate)
+
+    p_bench = sub.add_parser("bench", help="run the benchmarks")
+    p_bench.add_argument("--quick", action="store_true", help="small sizes only")
+    p_bench.add_argument("--dir", help="folder of the benchmark scripts")
+    p_bench.add_argument("-q", "--quiet", action="store_true", help="no progress, no tables")
+    p_bench.set_defaults(func=_bench)
+
     demo = sub.add_parser("demo", help="solve paper exp. 3 and print a table")
     demo.add_argument(
         "--h",
@@ -61,6 +313,7 @@ def main(argv: list[str] | None = None) -> int:
         help="lattice spacings (default: 0.05 0.025 0.0125)",
     )
     demo.set_defaults(func=_demo)
+
     args = parser.parse_args(argv)
     logging.basicConfig(
         level=logging.INFO if args.verbose else logging.WARNING,
@@ -69,7 +322,19 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "command", None):
         parser.print_help()
         return 2
-    return args.func(args)
+    from .linalg import SolverError
+
+    try:
+        return args.func(args)
+    except SolverError as exc:
+        print(f"error: the solver refused or failed: {exc}", file=sys.stderr)
+        return 3
+    except (ValueError, TypeError, FileNotFoundError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":

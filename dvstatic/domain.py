@@ -48,10 +48,10 @@ class Polygon:
         edge = np.roll(v, -1, axis=0) - v
         if np.any(np.hypot(edge[:, 0], edge[:, 1]) == 0):
             raise ValueError("polygon has repeated consecutive vertices (zero-length edge)")
-        if abs(_signed_area(v)) == 0:
-            raise ValueError("polygon has zero area")
         if _self_intersects(v):
             raise ValueError("polygon edges intersect each other (self-intersecting polygon)")
+        if abs(_signed_area(v)) <= 1e-14 * float(np.max(np.ptp(v, axis=0))) ** 2:
+            raise ValueError("polygon has zero area")
         v.setflags(write=False)
         object.__setattr__(self, "vertices", v)
         object.__setattr__(self, "names", tuple(str(n) for n in self.names))

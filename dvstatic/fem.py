@@ -68,6 +68,7 @@ class FESolution:
     info: dict
     _basis: object
     _x: np.ndarray
+    _stress_nodal: object = None
 
     def evaluate(self, points) -> np.ndarray:
         """Displacement at arbitrary points inside the mesh, shape (n, 2)."""
@@ -82,6 +83,32 @@ class FESolution:
     @property
     def max_displacement(self) -> float:
         return float(np.max(np.hypot(self.u[:, 0], self.u[:, 1])))
+
+    def stress(self, points) -> np.ndarray:
+        """Plane-stress Cauchy stress at points, shape (n, 2, 2).
+
+        The element stresses are L2-projected onto continuous scalar elements of the
+        same order (smooth nodal stresses), then evaluated at the points.
+        """
+        import skfem
+
+        p = np.atleast_2d(np.asarray(points, dtype=float))
+        if p.ndim != 2 or p.shape[1] != 2:
+            raise ValueError(f"points must have shape (n, 2), got {p.shape}")
+        if self._stress_nodal is None:
+            lam, mu = self.info["lame"]
+            g = self._basis.interpolate(self._x).grad  # (2, 2, elements, quadrature points)
+            exx, eyy, exy = g[0, 0], g[1, 1], 0.5 * (g[0, 1] + g[1, 0])
+            tr = exx + eyy
+            comps = (lam * tr + 2 * mu * exx, lam * tr + 2 * mu * eyy, 2 * mu * exy)
+            el = skfem.ElementTriP1() if self.order == 1 else skfem.ElementTriP2()
+            sb = self._basis.with_element(el)
+            vals = [sb.project(skfem.DiscreteField(c)) for c in comps]
+            object.__setattr__(self, "_stress_nodal", (sb, vals))
+        sb, vals = self._stress_nodal
+        probe = sb.probes(np.ascontiguousarray(p.T))
+        sxx, syy, sxy = (probe @ v for v in vals)
+        return np.stack([np.stack([sxx, sxy], -1), np.stack([sxy, syy], -1)], -2)
 
 
 def _facets_on_edges(fm, coarse_pts: np.ndarray, edges: np.ndarray) -> np.ndarray:
@@ -225,6 +252,7 @@ def solve(
     info = {
         "n_dof": int(basis.N),
         "n_elements": int(fm.t.shape[1]),
+        "lame": (lam, mu),
         "seconds": {"mesh": t1 - t0, "assembly": t2 - t1, "solve": t3 - t2, "total": t3 - t0},
     }
     log.info("FE P%d refine=%d: %d dof in %.3f s", order, refine, basis.N, t3 - t0)

@@ -15,19 +15,22 @@ from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
-from scipy.spatial import Delaunay
 
-from ._checks import check_int, check_positive, check_seed
-from .domain import Circle, Domain, Polygon, rectangle_domain
+from ._checks import check_positive, check_seed
+from .domain import Domain
 
 log = logging.getLogger(__name__)
 
-__all__ = ["Mesh", "Topology", "rectangle", "periodic_square", "KINDS"]
-
-#: Mesh kinds understood by the generators.
-KINDS = ("lattice", "jittered", "random")
-
-SQRT3_2 = np.sqrt(3.0) / 2.0
+__all__ = [
+    "Mesh",
+    "Topology",
+    "rectangle",
+    "polygon",
+    "disc",
+    "generate",
+    "periodic_square",
+    "KINDS",
+]
 
 
 @dataclass(frozen=True, eq=False)
@@ -323,6 +326,8 @@ class Mesh:
         -------
         Mesh
         """
+        from .meshgen import _disc, _move_in_domain, _periodic_delaunay
+
         amplitude = check_positive("amplitude", amplitude, allow_zero=True)
         rng = np.random.default_rng(check_seed(seed))
         p = np.array(self.points)
@@ -355,145 +360,7 @@ class Mesh:
         return f"Mesh({kind}N={self.n_points}, triangles={self.n_triangles}{parts})"
 
 
-# ---------------------------------------------------------------------- generators
-def rectangle(
-    width: float = 1.0,
-    height: float = 1.0,
-    h: float = 0.1,
-    kind: str = "jittered",
-    jitter: float = 0.3,
-    seed: int | None = 0,
-) -> Mesh:
-    """Triangulated rectangle ``[0, width] x [0, height]``.
-
-    Parameters
-    ----------
-    width, height : float
-        Rectangle size (length units), > 0.
-    h : float
-        Target node spacing, 0 < h <= min(width, height).
-    kind : {"lattice", "jittered", "random"}
-        ``lattice``: regular triangular lattice (rows ``h sqrt(3)/2`` apart, exact
-        equilateral triangles when the size fits); ``jittered``: lattice nodes shifted
-        by up to ``jitter * h``, the shift tapering off within about one spacing of the
-        sides, where nodes slide along their side by up to ``jitter * h / 2``; ``random``:
-        uniformly distributed interior points (same density), boundary nodes at
-        spacing about ``h``.
-    jitter : float
-        Relative jitter for ``kind="jittered"``, in [0, 0.5).
-    seed : int or None
-        Random seed.
-
-    Returns
-    -------
-    Mesh
-        With parts ``"bottom"``, ``"right"``, ``"top"``, ``"left"``; boundary nodes lie
-        exactly on the sides.
-    """
-    width = check_positive("width", width)
-    height = check_positive("height", height)
-    h = check_positive("h", h)
-    if h > min(width, height):
-        raise ValueError(
-            f"h = {h} is larger than the domain (min(width, height) = {min(width, height)}); "
-            "use h <= min(width, height)"
-        )
-    kind = _check_kind(kind)
-    jitter = float(check_positive("jitter", jitter, allow_zero=True))
-    if jitter >= 0.5:
-        raise ValueError(f"jitter must be in [0, 0.5), got {jitter}")
-    rng = np.random.default_rng(check_seed(seed))
-    if kind == "random":
-        pts = _random_rectangle_points(width, height, h, rng)
-    else:
-        pts, boundary, side_dir, side_step = _lattice_points(width, height, h)
-        if kind == "jittered" and jitter > 0:
-            _jitter_rectangle(pts, boundary, side_dir, side_step, width, height, h, jitter, rng)
-    pts = pts[spatial_order(pts)]
-    domain = rectangle_domain(width, height)
-    pts, tri, parts = domain.triangulate(pts, 1e-9 * h)
-    mesh = Mesh(pts, tri, parts=parts, domain=domain)
-    log.debug("rectangle %s: %r", kind, mesh)
-    return mesh
-
-
-def periodic_square(
-    n_points: int, kind: str = "random", seed: int | None = 0, jitter: float = 0.3
-) -> Mesh:
-    """Periodic triangulation of the unit square (a representative volume element).
-
-    Parameters
-    ----------
-    n_points : int
-        Approximate number of particles, >= 16 (exact for ``random``).
-    kind : {"random", "jittered", "lattice"}
-        ``lattice`` is a triangular lattice with ``nx`` columns and an even number of
-        rows (so it closes periodically; nearly equilateral), ``jittered`` the same
-        with shifts up to ``jitter`` times the spacing, ``random`` uniform points.
-    seed : int or None
-        Random seed.
-    jitter : float
-        Relative jitter for ``kind="jittered"``, in [0, 0.5).
-
-    Returns
-    -------
-    Mesh
-        Periodic mesh (``period = (1, 1)``); bonds across the period carry the image
-        shift in :attr:`Topology.bond_image`.
-    """
-    n_points = check_int("n_points", n_points, minimum=16)
-    kind = _check_kind(kind)
-    jitter = float(check_positive("jitter", jitter, allow_zero=True))
-    if jitter >= 0.5:
-        raise ValueError(f"jitter must be in [0, 0.5), got {jitter}")
-    rng = np.random.default_rng(check_seed(seed))
-    if kind == "random":
-        p = rng.random((n_points, 2))
-    else:
-        nx = max(4, int(round(np.sqrt(n_points * SQRT3_2))))
-        ny = max(4, 2 * int(round(nx / np.sqrt(3.0))))
-        j, i = np.divmod(np.arange(nx * ny), nx)
-        p = np.c_[(i + 0.5 * (j % 2) + 0.25) / nx, (j + 0.25) / ny]
-        if kind == "jittered" and jitter > 0:
-            p += _disc(rng, len(p)) * jitter / nx
-            p = np.mod(p, 1.0)
-    p[p >= 1.0] = 0.0
-    p = p[spatial_order(p)]
-    period = np.array([1.0, 1.0])
-    tri, images = _periodic_delaunay(p, period)
-    return Mesh(p, tri, period=period, images=images)
-
-
 # ---------------------------------------------------------------------- internals
-def spatial_order(points: np.ndarray) -> np.ndarray:
-    """Permutation that sorts points along a Morton (Z-order) curve.
-
-    Neighbouring particles get nearby indices, which narrows the band of the
-    stiffness matrix touched by each assembly chunk and improves cache use in
-    matrix-vector products and AMG.
-    """
-    lo = points.min(axis=0)
-    span = max(float(np.max(np.ptp(points, axis=0))), np.finfo(float).tiny)
-    q = np.minimum(((points - lo) / span * 65535.0).astype(np.uint64), 65535)
-
-    def spread(v: np.ndarray) -> np.ndarray:
-        v = (v | (v << np.uint64(8))) & np.uint64(0x00FF00FF)
-        v = (v | (v << np.uint64(4))) & np.uint64(0x0F0F0F0F)
-        v = (v | (v << np.uint64(2))) & np.uint64(0x33333333)
-        return (v | (v << np.uint64(1))) & np.uint64(0x55555555)
-
-    key = spread(q[:, 0]) | (spread(q[:, 1]) << np.uint64(1))
-    return np.argsort(key, kind="stable")
-
-
-def _check_kind(kind: str) -> str:
-    if not isinstance(kind, str):
-        raise TypeError(f"kind must be a string, one of {KINDS}, got {type(kind).__name__}")
-    if kind not in KINDS:
-        raise ValueError(f"unknown mesh kind {kind!r}; accepted: {', '.join(KINDS)}")
-    return kind
-
-
 def _as_points(points) -> np.ndarray:
     try:
         p = np.array(points, dtype=float)
@@ -601,170 +468,12 @@ def _topology(tri: np.ndarray, n: int, images: np.ndarray | None) -> Topology:
     return out
 
 
-def _disc(rng: np.random.Generator, n: int) -> np.ndarray:
-    """n points uniformly distributed in the unit disc."""
-    r = np.sqrt(rng.random(n))
-    t = 2 * np.pi * rng.random(n)
-    return np.c_[r * np.cos(t), r * np.sin(t)]
-
-
-def _lattice_points(width: float, height: float, h: float):
-    """Triangular lattice filling the rectangle, boundary nodes on the sides.
-
-    Returns points, boundary mask, along-side direction (0 = x, 1 = y, -1 corner)
-    and the node spacing along that side.
-    """
-    nx = max(1, int(round(width / h)))
-    ny = max(1, int(round(height / (h * SQRT3_2))))
-    hx, hy = width / nx, height / ny
-    rows = []
-    for j in range(ny + 1):
-        y = height if j == ny else j * hy
-        if j % 2 == 0:
-            x = np.arange(nx + 1) * hx
-        else:
-            x = np.concatenate([[0.0], (np.arange(nx) + 0.5) * hx, [width]])
-        x[-1] = width
-        rows.append(np.c_[x, np.full(len(x), y)])
-    p = np.vstack(rows)
-    on_x = (p[:, 0] == 0) | (p[:, 0] == width)
-    on_y = (p[:, 1] == 0) | (p[:, 1] == height)
-    boundary = on_x | on_y
-    side_dir = np.full(len(p), -1)
-    side_dir[on_y & ~on_x] = 0
-    side_dir[on_x & ~on_y] = 1
-    side_step = np.where(side_dir == 0, hx, hy)
-    # on odd rows the x-sides get an extra node: spacing along them is hy
-    return p, boundary, side_dir, side_step
-
-
-def _jitter_rectangle(p, boundary, side_dir, side_step, width, height, h, jitter, rng) -> None:
-    """Shift lattice nodes: interior nodes in a disc of radius ``jitter * h``, tapered
-    to zero near the sides (ramp from 0.4 h to 1.2 h), boundary nodes along their side by
-    up to half that. The taper keeps the boundary cells well shaped: a boundary node
-    with two triangles and an obtuse angle makes the DV coupling there indefinite.
-    """
-    interior = ~boundary
-    d_wall = np.minimum.reduce([p[:, 0], width - p[:, 0], p[:, 1], height - p[:, 1]])
-    taper = np.clip((d_wall - 0.4 * h) / (0.8 * h), 0.0, 1.0)
-    shift = _disc(rng, len(p)) * (jitter * h * taper)[:, None]
-    p[interior] += shift[interior]
-    slide = (rng.random(len(p)) * 2 - 1) * 0.5 * jitter * side_step
-    for axis in (0, 1):
-        sel = boundary & (side_dir == axis)
-        p[sel, axis] += slide[sel]
-
-
-def _random_rectangle_points(width: float, height: float, h: float, rng) -> np.ndarray:
-    nbx = max(1, int(round(width / h)))
-    nby = max(1, int(round(height / h)))
-    xs = np.linspace(0.0, width, nbx + 1)
-    ys = np.linspace(0.0, height, nby + 1)
-    xs[-1], ys[-1] = width, height
-    bnd = np.vstack(
-        [
-            np.c_[xs, np.zeros_like(xs)],
-            np.c_[xs, np.full_like(xs, height)],
-            np.c_[np.zeros(nby - 1), ys[1:-1]],
-            np.c_[np.full(nby - 1, width), ys[1:-1]],
-        ]
-    )
-    n_int = max(0, int(round(width * height / (SQRT3_2 * h * h) - 0.5 * len(bnd))))
-    margin = 0.1 * h
-    inner = np.c_[
-        margin + (width - 2 * margin) * rng.random(n_int),
-        margin + (height - 2 * margin) * rng.random(n_int),
-    ]
-    return np.vstack([bnd, inner])
-
-
-def _periodic_delaunay(p: np.ndarray, period: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Delaunay triangulation of points in a periodic box.
-
-    Points are copied across the box sides within a margin, triangulated, and the
-    triangles whose centroid lies in the box are kept, each once.
-    """
-    n = len(p)
-    margin = min(1.0, 4.0 * np.sqrt(np.log(n + 2.0) / n))
-    while True:
-        offs = np.array([(i, j) for i in (-1, 0, 1) for j in (-1, 0, 1)])
-        allp, ids, img = [], [], []
-        for o in offs:
-            q = p + o * period
-            keep = np.all((q >= -margin * period) & (q < (1 + margin) * period), axis=1)
-            allp.append(q[keep])
-            ids.append(np.flatnonzero(keep))
-            img.append(np.broadcast_to(o, (int(keep.sum()), 2)))
-        allp = np.vstack(allp)
-        ids = np.concatenate(ids)
-        img = np.vstack(img)
-        tri = Delaunay(allp).simplices
-        c = allp[tri].mean(axis=1)
-        keep = np.all((c >= 0) & (c < period), axis=1)
-        tri = tri[keep]
-        x = allp[tri]
-        a2 = _cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])
-        tri[a2 < 0] = tri[a2 < 0][:, [0, 2, 1]]
-        area = 0.5 * np.abs(a2).sum()
-        ok = abs(area - period.prod()) <= 1e-9 * period.prod()
-        if ok:
-            try:
-                t, im = ids[tri], img[tri]
-                _topology(t, n, im)
-                order = np.argsort(t.min(axis=1), kind="stable")
-                return t[order], im[order]
-            except ValueError:
-                ok = False
-        if margin >= 1.0:
-            raise ValueError("could not build a periodic triangulation of these points")
-        margin = min(1.0, 2 * margin)
-
-
-def _move_in_domain(domain: Domain, p: np.ndarray, amplitude: float, rng, tol: float) -> np.ndarray:
-    """Random moves keeping boundary nodes on their curve and corners fixed."""
-    p = p.copy()
-    dist, names = domain.curve_distances(p)
-    on = dist <= tol
-    n_on = on.sum(axis=1)
-    corners = domain.corners()
-    is_corner = n_on >= 2
-    if len(corners):
-        dc = np.min(
-            np.hypot(p[:, None, 0] - corners[None, :, 0], p[:, None, 1] - corners[None, :, 1]),
-            axis=1,
-        )
-        is_corner |= dc <= tol
-    curves = []
-    for loop in domain.loops:
-        if isinstance(loop, Polygon):
-            curves.extend(("seg", a, b) for _, a, b in loop.curves())
-        else:
-            curves.append(("circle", loop, None))
-    interior = n_on == 0
-    # boundary nodes: slide along their curve
-    for c, (kind, a, b) in enumerate(curves):
-        sel = np.flatnonzero(on[:, c] & ~is_corner & (n_on == 1))
-        if sel.size == 0:
-            continue
-        s = (rng.random(sel.size) * 2 - 1) * amplitude
-        if kind == "seg":
-            t = (b - a) / np.hypot(*(b - a))
-            length = np.hypot(*(b - a))
-            u = np.einsum("ij,j->i", p[sel] - a, t) + s
-            u = np.clip(u, 0.05 * amplitude, length - 0.05 * amplitude)
-            p[sel] = a + u[:, None] * t
-        else:
-            circ: Circle = a
-            cc = np.asarray(circ.center)
-            ang = np.arctan2(p[sel, 1] - cc[1], p[sel, 0] - cc[0]) + s / circ.radius
-            p[sel] = cc + circ.radius * np.c_[np.cos(ang), np.sin(ang)]
-    idx = np.flatnonzero(interior)
-    for _ in range(8):
-        if idx.size == 0:
-            break
-        trial = p[idx] + _disc(rng, idx.size) * amplitude
-        d, _ = domain.curve_distances(trial)
-        good = domain.contains(trial) & (d.min(axis=1) > 0.05 * amplitude)
-        p[idx[good]] = trial[good]
-        idx = idx[~good]
-    return p
+# generators live in meshgen.py; re-exported here as dvstatic.mesh.rectangle etc.
+from .meshgen import (  # noqa: E402
+    KINDS,
+    disc,
+    generate,
+    periodic_square,
+    polygon,
+    rectangle,
+)

@@ -45,6 +45,7 @@ class NewtonOptions:
     solver: str = "direct"
     allow_unstable: bool = False
     linear_rtol: float = 1e-10
+    progress: bool = False
 
 
 @dataclass
@@ -203,50 +204,65 @@ def solve_nonlinear(
     steps_info: list[dict] = []
     cutbacks = 0
     step_no = 0
-    while lam < 1.0 - 1e-14:
-        target = min(1.0, lam + dlam)
-        step_no += 1
-        ok, u_new, sinfo = _newton_step(
-            model, u, lam, target, dofs, values, f_ext, f_scale, atol, opts, tangent
-        )
-        if ok:
-            if not opts.allow_unstable and opts.solver == "direct" and tangent.last_negative_pivots:
-                raise linalg.SolverError(
-                    f"load step {step_no} (load factor {target:.4g}) converged to an unstable "
-                    f"equilibrium: the tangent has {tangent.last_negative_pivots} negative "
-                    "pivot(s) (buckling or a limit point); the load cannot be carried in this "
-                    "configuration. Add an imperfection to follow a post-buckling path, or "
-                    "pass allow_unstable=True to accept the state",
-                    {"steps": steps_info, "failed_step": sinfo},
+    bar = _progress_bar(opts.progress)
+    try:
+        while lam < 1.0 - 1e-14:
+            target = min(1.0, lam + dlam)
+            step_no += 1
+            ok, u_new, sinfo = _newton_step(
+                model, u, lam, target, dofs, values, f_ext, f_scale, atol, opts, tangent
+            )
+            if ok:
+                if (
+                    not opts.allow_unstable
+                    and opts.solver == "direct"
+                    and tangent.last_negative_pivots
+                ):
+                    raise linalg.SolverError(
+                        f"load step {step_no} (load factor {target:.4g}) converged to an unstable "
+                        f"equilibrium: the tangent has {tangent.last_negative_pivots} negative "
+                        "pivot(s) (buckling or a limit point); the load cannot be carried in this "
+                        "configuration. Add an imperfection to follow a post-buckling path, or "
+                        "pass allow_unstable=True to accept the state",
+                        {"steps": steps_info, "failed_step": sinfo},
+                    )
+                u = u_new
+                lam = target
+                sinfo["load_factor"] = lam
+                steps_info.append(sinfo)
+                log.info(
+                    "step %d: load factor %.4g in %d iterations (residual %.2e)",
+                    step_no,
+                    lam,
+                    sinfo["iterations"],
+                    sinfo["residuals"][-1],
                 )
-            u = u_new
-            lam = target
-            sinfo["load_factor"] = lam
-            steps_info.append(sinfo)
+                if bar is not None:
+                    bar.n = round(100 * lam)
+                    bar.set_postfix_str(f"step {step_no}, {sinfo['iterations']} it")
+                    bar.refresh()
+                if sinfo["iterations"] <= 4:
+                    dlam = min(1.0 / opts.steps, 1.5 * dlam)
+                continue
+            cutbacks += 1
+            if cutbacks > opts.max_cutbacks:
+                raise linalg.SolverError(
+                    f"load step {step_no} (from load factor {lam:.4g} to {target:.4g}) did not "
+                    f"converge: residual {sinfo['residuals'][-1]:.3e} against a tolerance of "
+                    f"{sinfo['tolerance']:.3e} after {sinfo['iterations']} Newton iterations "
+                    f"({sinfo['reason']}); tried {cutbacks - 1} cut-back(s) down to a step of "
+                    f"{dlam:.3g}, with line search={opts.line_search} and the "
+                    f"{opts.solver} linear solver. The load may exceed what the structure can "
+                    "carry, or more steps are needed",
+                    {"steps": steps_info, "failed_step": sinfo, "cutbacks": cutbacks - 1},
+                )
+            dlam *= 0.5
             log.info(
-                "step %d: load factor %.4g in %d iterations (residual %.2e)",
-                step_no,
-                lam,
-                sinfo["iterations"],
-                sinfo["residuals"][-1],
+                "step %d failed (%s); cutting the step to %.3g", step_no, sinfo["reason"], dlam
             )
-            if sinfo["iterations"] <= 4:
-                dlam = min(1.0 / opts.steps, 1.5 * dlam)
-            continue
-        cutbacks += 1
-        if cutbacks > opts.max_cutbacks:
-            raise linalg.SolverError(
-                f"load step {step_no} (from load factor {lam:.4g} to {target:.4g}) did not "
-                f"converge: residual {sinfo['residuals'][-1]:.3e} against a tolerance of "
-                f"{sinfo['tolerance']:.3e} after {sinfo['iterations']} Newton iterations "
-                f"({sinfo['reason']}); tried {cutbacks - 1} cut-back(s) down to a step of "
-                f"{dlam:.3g}, with line search={opts.line_search} and the "
-                f"{opts.solver} linear solver. The load may exceed what the structure can "
-                "carry, or more steps are needed",
-                {"steps": steps_info, "failed_step": sinfo, "cutbacks": cutbacks - 1},
-            )
-        dlam *= 0.5
-        log.info("step %d failed (%s); cutting the step to %.3g", step_no, sinfo["reason"], dlam)
+    finally:
+        if bar is not None:
+            bar.close()
     info = {
         "steps": steps_info,
         "cutbacks": cutbacks,
@@ -256,6 +272,21 @@ def solve_nonlinear(
         "newton_seconds": time.perf_counter() - t_start,
     }
     return u, info
+
+
+def _progress_bar(enabled: bool):
+    """A tqdm bar of the load factor (in %), or None."""
+    if not enabled:
+        return None
+    from tqdm import tqdm
+
+    return tqdm(
+        total=100,
+        desc="load",
+        unit="%",
+        leave=False,
+        bar_format="{desc}: {percentage:3.0f}%|{bar}| {postfix}",
+    )
 
 
 def _newton_step(model, u0, lam0, lam, dofs, values, f_ext, f_scale, atol, opts, tangent):

@@ -60,11 +60,24 @@ class Solution:
             return self.model.bond_tension(self.u)
         return self.model.linear_tension(self.u)
 
-    def stress(self) -> np.ndarray:
-        """Per-node virial stress over the Voronoi cells, shape (N, 2, 2)."""
-        from .post import node_stress
+    def stress(self, method: str = "virial") -> np.ndarray:
+        """Per-node stress, shape (N, 2, 2).
 
-        return node_stress(self.model, self.u, linear=not self.info.get("nonlinear", False))
+        Parameters
+        ----------
+        method : {"virial", "strain"}
+            ``virial``: the lattice's own force-based stress over each Voronoi cell
+            (:func:`dvstatic.post.node_stress`); ``strain``: the plane-stress law
+            applied to the area-averaged lattice strain
+            (:func:`dvstatic.post.strain_stress`), better at free surfaces.
+        """
+        from .post import node_stress, strain_stress
+
+        if method == "virial":
+            return node_stress(self.model, self.u, linear=not self.info.get("nonlinear", False))
+        if method == "strain":
+            return strain_stress(self.model, self.u)
+        raise ValueError(f"unknown stress method {method!r}; accepted: virial, strain")
 
     def energy(self) -> float:
         """Strain energy ``u.K.u / 2`` of the linear model (energy per unit thickness)."""
@@ -88,6 +101,7 @@ def solve(
     max_cutbacks: int = 8,
     line_search: bool = True,
     allow_unstable: bool = False,
+    progress: bool = False,
 ) -> Solution:
     """Solve the static problem: linear ``K u = f``, or geometrically exact equilibrium.
 
@@ -127,6 +141,8 @@ def solve(
     allow_unstable : bool
         Nonlinear with the direct solver: accept converged states whose tangent has
         negative pivots (otherwise they raise: buckling or a limit point).
+    progress : bool
+        Nonlinear: show a progress bar of the load factor on stderr (tqdm).
 
     Returns
     -------
@@ -193,6 +209,7 @@ def solve(
             line_search=bool(line_search),
             solver=kind,
             allow_unstable=bool(allow_unstable),
+            progress=bool(progress),
         )
         t0 = time.perf_counter()
         x, ninfo = solve_nonlinear(model, dofs, values, f, opts)

@@ -1,0 +1,338 @@
+"""Files: gmsh/meshio import, VTU export, JSON summary, PNG pictures.
+
+Two functions and a container, meshio style: :func:`read_mesh` turns a mesh file
+into a :class:`~dvstatic.Mesh` (physical line groups become named boundary parts),
+:func:`write_vtu` writes a solution with everything a viewer needs. Every file is
+written to a temporary name in the target folder and renamed, so a crash never
+leaves a half-written file under the final name. meshio and matplotlib are imported
+on first use.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+from pathlib import Path
+
+import numpy as np
+
+from .mesh import Mesh
+
+log = logging.getLogger(__name__)
+
+__all__ = [
+    "read_mesh",
+    "write_vtu",
+    "summary",
+    "write_json",
+    "write_png",
+    "atomic_path",
+    "FIELDS",
+    "nodal_field",
+]
+
+#: nodal fields for pictures
+FIELDS = ("|u|", "ux", "uy", "sxx", "syy", "sxy", "von_mises")
+
+
+def atomic_path(path: Path) -> Path:
+    """Temporary sibling of ``path`` (same folder, so the final rename is atomic)."""
+    return path.with_name(f".{path.name}.{os.getpid()}.tmp")
+
+
+def _finish(tmp: Path, path: Path) -> Path:
+    os.replace(tmp, path)
+    return path
+
+
+def read_mesh(path: str | Path) -> Mesh:
+    """Read a triangle mesh (gmsh ``.msh`` or any format meshio reads).
+
+    Points must be planar (z = 0). Triangles (3- or 6-node; the corner nodes are
+    used) become the mesh; points not used by any triangle are dropped. Line cells
+    with a gmsh physical group become a named boundary part (the group's name, or
+    ``"group<tag>"``).
+
+    Raises
+    ------
+    ValueError
+        Missing file, no triangles, non-planar points, or line groups that are not
+        boundary edges of the triangles.
+    """
+    import meshio
+
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"mesh file not found: {path}")
+    try:
+        m = meshio.read(path)
+    except Exception as exc:  # meshio raises many types for unreadable files
+        raise ValueError(f"cannot read mesh file {path}: {exc}") from None
+    pts = np.asarray(m.points, dtype=float)
+    if pts.shape[1] == 3:
+        if np.any(np.abs(pts[:, 2]) > 1e-12 * max(1.0, np.abs(pts[:, :2]).max())):
+            raise ValueError(f"{path}: points are not planar (z != 0); dvstatic is 2-D")
+        pts = pts[:, :2]
+    tris = [c.data[:, :3] for c in m.cells if c.type in ("triangle", "triangle6")]
+    if not tris:
+        raise ValueError(
+            f"{path}: no triangle cells found (cell types: {sorted({c.type for c in m.cells})})"
+        )
+    tri = np.vstack(tris).astype(np.int64)
+    used = np.unique(tri)
+    remap = -np.ones(len(pts), dtype=np.int64)
+    remap[used] = np.arange(len(used))
+    parts: dict[str, list[np.ndarray]] = {}
+    phys = m.cell_data.get("gmsh:physical")
+    names = {}
+    for name, (tag, dim) in ((k, v[:2]) for k, v in m.field_data.items()):
+        if int(dim) == 1:
+            names[int(tag)] = name
+    if phys is not None:
+        for block, tags in zip(m.cells, phys, strict=True):
+            if block.type not in ("line", "line3"):
+                continue
+            edges = block.data[:, :2].astype(np.int64)
+            for tag in np.unique(tags):
+                sel = edges[np.asarray(tags) == tag]
+                if np.any(remap[sel] < 0):
+                    raise ValueError(f"{path}: line group {tag} uses points outside the triangles")
+                parts.setdefault(names.get(int(tag), f"group{int(tag)}"), []).append(remap[sel])
+    parts_arr = {k: np.vstack(v) for k, v in parts.items()}
+    mesh = Mesh(pts[used], remap[tri], parts=parts_arr)
+    log.info("read %s: %r", path, mesh)
+    return mesh
+
+
+def nodal_field(solution, name: str, stress: str = "virial") -> np.ndarray:
+    """A nodal scalar field of a solution by name (see :data:`FIELDS`); stress fields
+    use the recovery ``stress`` ("virial" or "strain", see ``Solution.stress``)."""
+    u = solution.u
+    if name == "|u|":
+        return np.hypot(u[:, 0], u[:, 1])
+    if name == "ux":
+        return u[:, 0]
+    if name == "uy":
+        return u[:, 1]
+    if name in ("sxx", "syy", "sxy", "von_mises"):
+        s = solution.stress(stress)
+        sxx, syy, sxy = s[:, 0, 0], s[:, 1, 1], 0.5 * (s[:, 0, 1] + s[:, 1, 0])
+        if name == "sxx":
+            return sxx
+        if name == "syy":
+            return syy
+        if name == "sxy":
+            return sxy
+        return np.sqrt(sxx**2 - sxx * syy + syy**2 + 3 * sxy**2)
+    raise ValueError(f"unknown field {name!r}; accepted: {', '.join(FIELDS)}")
+
+
+def write_vtu(path: str | Path, solution, stress: bool = True) -> Path:
+    """Write a solution as VTU (ParaView), atomically.
+
+    Content: 3-D points (z = 0); cells: the triangles and the bonds (as lines);
+    point data ``displacement`` (N, 3) and, with ``stress``, ``stress`` (N, 9, the
+    virial stress per Voronoi cell as a 3x3 tensor) and ``stress_from_strain`` (N, 9,
+    the strain-based recovery, better at free surfaces); cell data ``tension`` (bond
+    tension on line cells, 0 on triangles) and ``area`` (triangle area, 0 on lines).
+    """
+    import meshio
+
+    path = Path(path)
+    mesh = solution.model.mesh
+    pts = np.c_[mesh.points, np.zeros(mesh.n_points)]
+    bonds = mesh.topology.bonds
+    point_data = {"displacement": np.c_[solution.u, np.zeros(mesh.n_points)]}
+    if stress:
+        s = solution.stress()
+        t9 = np.zeros((mesh.n_points, 9))
+        t9[:, [0, 1, 3, 4]] = s.reshape(-1, 4)
+        point_data["stress"] = t9
+        t9s = np.zeros((mesh.n_points, 9))
+        t9s[:, [0, 1, 3, 4]] = solution.stress("strain").reshape(-1, 4)
+        point_data["stress_from_strain"] = t9s
+    tension = solution.tension()
+    cell_data = {
+        "tension": [np.zeros(mesh.n_triangles), tension],
+        "area": [np.asarray(mesh.triangle_areas), np.zeros(len(bonds))],
+    }
+    out = meshio.Mesh(
+        pts,
+        [("triangle", mesh.triangles), ("line", bonds)],
+        point_data=point_data,
+        cell_data=cell_data,
+    )
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = atomic_path(path)
+    meshio.write(tmp, out, file_format="vtu")
+    return _finish(tmp, path)
+
+
+def summary(solution, fe=None, probes=None, part_stress=()) -> dict:
+    """JSON-ready summary of a solution (and of an FE comparison, if given).
+
+    Parameters
+    ----------
+    solution : Solution
+    fe : FESolution, optional
+        Reference on the same mesh; adds relative L2 and max differences.
+    probes : array_like, shape (n, 2), optional
+        Points where displacement and stress (lattice and FE) are reported.
+    part_stress : sequence of str
+        Boundary parts whose nodal stress extremes are reported (max/min of sxx,
+        syy and of the largest principal stress over the part's nodes): the lattice
+        virial stress (``lattice``), the strain-based recovery (``lattice_strain``,
+        better at free surfaces) and, with ``fe``, the FE stress at the same nodes.
+    """
+    from .fem import compare
+    from .loads import select_nodes
+    from .post import interpolate
+
+    model = solution.model
+    mesh = model.mesh
+    info = solution.info
+    out = {
+        "mesh": {
+            "nodes": mesh.n_points,
+            "bonds": mesh.n_bonds,
+            "triangles": mesh.n_triangles,
+            "area": mesh.area,
+            "mean_bond_length": mesh.h,
+            "sigma_L": mesh.edge_length_spread(),
+            "parts": sorted(mesh.parts),
+        },
+        "model": {
+            "type": model.kind,
+            "E": model.E,
+            "nu": model.nu,
+            "calibration": model.calibration,
+            "k_n": model.k_n,
+            "nu_m": model.nu_m,
+        },
+        "max_displacement": solution.max_displacement,
+        "reactions": {"total": solution.reactions.sum(axis=0).tolist()},
+        "solver": {
+            k: info[k]
+            for k in (
+                "solver",
+                "nonlinear",
+                "converged",
+                "iterations",
+                "residual",
+                "seconds",
+                "reused",
+                "n_dof",
+            )
+            if k in info
+        },
+    }
+    for i, s in enumerate(solution.supports):
+        nodes = select_nodes(mesh, s.where, "Fix")
+        key = s.where if isinstance(s.where, str) else f"support{i}"
+        out["reactions"][key] = solution.reactions[nodes].sum(axis=0).tolist()
+    if not info.get("nonlinear"):
+        out["strain_energy"] = solution.energy()
+    else:
+        out["solver"]["steps"] = len(info.get("steps", []))
+    stress = None
+    if (probes is not None and len(probes)) or part_stress:
+        stress = solution.stress()
+    p = None
+    if probes is not None and len(probes):
+        p = np.asarray(probes, dtype=float).reshape(-1, 2)
+        out["probes"] = {
+            "points": p.tolist(),
+            "displacement": interpolate(mesh, solution.u, p).tolist(),
+            "stress": interpolate(mesh, stress.reshape(-1, 4), p).reshape(-1, 2, 2).tolist(),
+        }
+    if part_stress:
+        strain_s = solution.stress("strain")
+        out["part_stress"] = {}
+        for name in part_stress:
+            nodes = mesh.part_nodes(name)
+            rec = {
+                "nodes": int(nodes.size),
+                "lattice": _stress_extremes(stress[nodes]),
+                "lattice_strain": _stress_extremes(strain_s[nodes]),
+            }
+            if fe is not None:
+                rec["fe"] = _stress_extremes(fe.stress(mesh.points[nodes]))
+            out["part_stress"][name] = rec
+    if fe is not None:
+        c = compare(solution, fe)
+        out["fe"] = {
+            "order": fe.order,
+            "refine": fe.refine,
+            "n_dof": fe.info["n_dof"],
+            "seconds": fe.info["seconds"],
+            "rel_l2_difference": c.l2,
+            "rel_max_difference": c.max,
+            "max_displacement": fe.max_displacement,
+        }
+        if p is not None:
+            out["probes"]["fe_displacement"] = fe.evaluate(p).tolist()
+            out["probes"]["fe_stress"] = fe.stress(p).tolist()
+    return out
+
+
+def _stress_extremes(s: np.ndarray) -> dict:
+    sxx, syy, sxy = s[:, 0, 0], s[:, 1, 1], 0.5 * (s[:, 0, 1] + s[:, 1, 0])
+    p1 = 0.5 * (sxx + syy) + np.sqrt(0.25 * (sxx - syy) ** 2 + sxy**2)
+    return {
+        "max_sxx": float(sxx.max()),
+        "min_sxx": float(sxx.min()),
+        "max_syy": float(syy.max()),
+        "min_syy": float(syy.min()),
+        "max_principal": float(p1.max()),
+    }
+
+
+def write_json(path: str | Path, data: dict) -> Path:
+    """Write ``data`` as indented JSON, atomically."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = atomic_path(path)
+    tmp.write_text(json.dumps(data, indent=2, default=_plain))
+    return _finish(tmp, path)
+
+
+def _plain(o):
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    if isinstance(o, np.generic):
+        return o.item()
+    raise TypeError(f"not JSON serialisable: {type(o).__name__}")
+
+
+def write_png(
+    path: str | Path,
+    solution,
+    field: str = "|u|",
+    scale: float | None = None,
+    title: str | None = None,
+    stress: str = "virial",
+) -> Path:
+    """Picture of the deformed mesh coloured by a nodal field, atomically.
+
+    ``scale`` magnifies the displacement (default: largest displacement drawn as 10 %
+    of the mesh size; 1 for nonlinear solutions).
+    """
+    from . import plot
+
+    path = Path(path)
+    mesh = solution.model.mesh
+    f = nodal_field(solution, field, stress)
+    if scale is None:
+        size = float(np.max(np.ptp(mesh.points, axis=0)))
+        umax = solution.max_displacement
+        scale = 1.0 if solution.info.get("nonlinear") or umax == 0 else 0.1 * size / umax
+    lo, hi = mesh.points.min(axis=0), mesh.points.max(axis=0)
+    aspect = (hi[1] - lo[1]) / max(hi[0] - lo[0], 1e-300)
+    fig, axes = plot.figure(1, 1, (9.0, max(3.0, min(9.0, 9.0 * aspect + 1.0))))
+    plot.draw_deformed(axes[0, 0], mesh, solution.u, scale=scale, field=f, label=field)
+    axes[0, 0].set_title(title or f"{solution.model.kind}: {field}, displacement x {scale:.3g}")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = atomic_path(path).with_suffix(".png")
+    plot.save(fig, tmp)
+    return _finish(tmp, path)

@@ -1,0 +1,102 @@
+"""Files: VTU round trip, gmsh import, JSON summary, PNG."""
+
+import json
+
+import meshio
+import numpy as np
+import pytest
+
+import dvstatic as dv
+from conftest import E_BEAM, NU, uniaxial_problem
+from dvstatic import io
+
+
+@pytest.fixture(scope="module")
+def solution():
+    m = dv.mesh.rectangle(1.0, 1.0, 0.1, kind="jittered", seed=2)
+    sup, ld = uniaxial_problem()
+    return dv.solve(dv.RV(m, E_BEAM, NU), sup, ld)
+
+
+def test_vtu_round_trip(solution, tmp_path):
+    path = io.write_vtu(tmp_path / "s.vtu", solution)
+    back = meshio.read(path)
+    mesh = solution.model.mesh
+    np.testing.assert_allclose(back.points[:, :2], mesh.points)
+    assert np.all(back.points[:, 2] == 0)
+    tri = next(c.data for c in back.cells if c.type == "triangle")
+    lines = next(c.data for c in back.cells if c.type == "line")
+    np.testing.assert_array_equal(tri, mesh.triangles)
+    np.testing.assert_array_equal(lines, mesh.topology.bonds)
+    np.testing.assert_allclose(back.point_data["displacement"][:, :2], solution.u)
+    blocks = [c.type for c in back.cells]
+    tension = back.cell_data["tension"][blocks.index("line")]
+    np.testing.assert_allclose(tension, solution.tension())
+    s9 = back.point_data["stress"].reshape(-1, 3, 3)
+    np.testing.assert_allclose(s9[:, :2, :2], solution.stress())
+    assert not list(tmp_path.glob(".*tmp"))  # no temporary file left behind
+
+
+def test_gmsh_mesh_loads_and_solves(tmp_path):
+    base = dv.mesh.rectangle(2.0, 1.0, 0.2, kind="jittered", seed=1)
+    left, right = base.part_edges("left"), base.part_edges("right")
+    # an unused point too (gmsh files often carry geometry points)
+    pts = np.vstack([np.c_[base.points, np.zeros(base.n_points)], [[9.0, 9.0, 0.0]]])
+    m = meshio.Mesh(
+        pts,
+        [("triangle", base.triangles), ("line", np.vstack([left, right]))],
+        cell_data={
+            "gmsh:physical": [
+                np.full(base.n_triangles, 3),
+                np.r_[np.full(len(left), 1), np.full(len(right), 2)],
+            ],
+            "gmsh:geometrical": [
+                np.full(base.n_triangles, 1),
+                np.r_[np.full(len(left), 1), np.full(len(right), 2)],
+            ],
+        },
+        field_data={"clamp": np.array([1, 1]), "pull": np.array([2, 1]), "body": np.array([3, 2])},
+    )
+    path = tmp_path / "plate.msh"
+    meshio.write(path, m, file_format="gmsh22", binary=False)
+    mesh = io.read_mesh(path)
+    assert mesh.n_points == base.n_points
+    assert {"clamp", "pull"} <= set(mesh.parts)
+    np.testing.assert_allclose(np.sort(mesh.part_nodes("pull")), np.sort(mesh.part_nodes("pull")))
+    sol = dv.solve(dv.DV(mesh, E_BEAM, NU), dv.Fix("clamp"), dv.Traction("pull", (1.0, 0.0)))
+    assert sol.u[mesh.part_nodes("pull"), 0].mean() > 0
+    assert sol.reactions.sum(axis=0)[0] == pytest.approx(-1.0, rel=1e-9)
+
+
+def test_read_mesh_errors(tmp_path):
+    with pytest.raises(ValueError, match="mesh file not found"):
+        io.read_mesh(tmp_path / "none.msh")
+    bad = tmp_path / "lines.vtu"
+    meshio.write(bad, meshio.Mesh(np.zeros((2, 3)), [("line", np.array([[0, 1]]))]))
+    with pytest.raises(ValueError, match="no triangle cells"):
+        io.read_mesh(bad)
+
+
+def test_summary_json_and_png(solution, tmp_path):
+    fe = dv.fem.solve(solution.model.mesh, E_BEAM, NU, solution.supports, solution.loads)
+    d = io.summary(solution, fe=fe, probes=[[0.5, 0.5]], part_stress=["right"])
+    for key in (
+        "mesh",
+        "model",
+        "max_displacement",
+        "reactions",
+        "strain_energy",
+        "solver",
+        "fe",
+        "probes",
+        "part_stress",
+    ):
+        assert key in d
+    assert d["mesh"]["sigma_L"] == pytest.approx(solution.model.mesh.edge_length_spread())
+    assert d["reactions"]["left"][0] == pytest.approx(1.0, rel=1e-9)
+    path = io.write_json(tmp_path / "s.json", d)
+    assert json.loads(path.read_text())["model"]["type"] == "RV"
+    png = io.write_png(tmp_path / "s.png", solution, field="von_mises")
+    assert png.read_bytes()[:4] == b"\x89PNG"
+    with pytest.raises(ValueError, match="unknown field"):
+        io.write_png(tmp_path / "t.png", solution, field="temperature")
