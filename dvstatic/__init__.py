@@ -18,6 +18,7 @@ from .mesh import Mesh
 from .models import DV, RV
 from .post import elastic_tensor, homogenize, plane_stress_tensor
 from .solvers import Solution, solve
+from .stability import stability
 
 __version__ = "0.1.0"
 
@@ -33,6 +34,7 @@ __all__ = [
     "BodyForce",
     "PointLoad",
     "solve",
+    "stability",
     "Solution",
     "SolverError",
     "homogenize",

@@ -30,9 +30,10 @@ from .geometry import Geometry
 from .kinematics import half_sides
 from .mesh import Mesh
 
-__all__ = ["MicroParameters", "Moments", "moments", "paper", "admissible_nu", "CALIBRATIONS"]
+__all__ = ["MicroParameters", "Moments", "moments", "paper", "relaxed", "admissible_nu",
+           "relaxed_moduli", "CALIBRATIONS"]
 
-CALIBRATIONS = ("paper",)
+CALIBRATIONS = ("paper", "relaxed")
 
 
 @dataclass(frozen=True)
@@ -64,14 +65,26 @@ class MicroParameters:
     k_n: float
     nu_m: float
     calibration: str
-    moments: Moments
-    nu_range: tuple[float, float]
+    moments: Moments | None = None
+    nu_range: tuple[float, float] = (float("nan"), float("nan"))
+    details: dict | None = None
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.k_n) and self.k_n > 0):
+            raise ValueError(f"k_n must be finite and > 0, got {self.k_n}")
+        if not np.isfinite(self.nu_m):
+            raise ValueError(f"nu_m must be finite, got {self.nu_m}")
 
 
-def moments(kind: str, mesh: Mesh, geom: Geometry) -> Moments:
-    """alpha, beta, M1, M2 of ``mesh`` for model ``kind`` ("DV" or "RV")."""
+def moments(kind: str, mesh: Mesh, geom: Geometry, weights=None) -> Moments:
+    """alpha, beta, M1, M2 of ``mesh`` for model ``kind`` ("DV" or "RV").
+
+    ``weights`` (E,) are the relative normal-spring stiffnesses (``bonds="voronoi"``);
+    they enter alpha = sum w l^2 / (8 A) only, since the coupling is not weighted.
+    """
     area = mesh.area
-    alpha = float(np.sum(geom.length**2) / (8 * area))
+    w = np.ones(len(geom.length)) if weights is None else np.asarray(weights)
+    alpha = float(np.sum(w * geom.length**2) / (8 * area))
     beta = float(np.sum(geom.length * geom.r) / (8 * area))
     if kind == "DV":
         return Moments(alpha, beta, beta, 3 * beta)
@@ -111,7 +124,8 @@ def admissible_nu(mom: Moments) -> tuple[float, float]:
     return (lo, hi)
 
 
-def paper(kind: str, mesh: Mesh, geom: Geometry, E: float, nu: float) -> MicroParameters:
+def paper(kind: str, mesh: Mesh, geom: Geometry, E: float, nu: float,
+          weights=None) -> MicroParameters:
     """Closed-form calibration of the paper (eqs. 9-10 for DV, 19-20 for RV).
 
     Raises
@@ -119,7 +133,7 @@ def paper(kind: str, mesh: Mesh, geom: Geometry, E: float, nu: float) -> MicroPa
     ValueError
         If nu lies outside the interval where the calibration has a solution.
     """
-    mom = moments(kind, mesh, geom)
+    mom = moments(kind, mesh, geom, weights)
     lo, hi = admissible_nu(mom)
     if not (lo < nu < hi):
         raise ValueError(
@@ -129,3 +143,236 @@ def paper(kind: str, mesh: Mesh, geom: Geometry, E: float, nu: float) -> MicroPa
     k_n = E * (mom.m2 - nu * mom.m1) / (mom.alpha * (1 - nu**2) * (3 * mom.m2 - mom.m1))
     nu_m = mom.alpha * (1 - 3 * nu) / (nu * mom.m1 - mom.m2)
     return MicroParameters(float(k_n), float(nu_m), "paper", mom, (lo, hi))
+
+
+# --------------------------------------------------------------------- relaxed
+#: points of the periodic sample used by the relaxed calibration
+REV_POINTS = 20_000
+#: resolution of the bond-length spread used to match samples
+SPREAD_STEP = 0.005
+_REV_CACHE: dict = {}
+_RELAXED_CACHE: dict = {}
+
+
+def interior_spread(mesh: Mesh) -> float:
+    """sigma_L over the bonds whose end nodes are both off the boundary."""
+    lengths = mesh.bond_lengths()
+    if not mesh.is_periodic:
+        bnd = np.zeros(mesh.n_points, dtype=bool)
+        bnd[mesh.boundary_nodes] = True
+        b = mesh.topology.bonds
+        inner = ~(bnd[b[:, 0]] | bnd[b[:, 1]])
+        if inner.sum() >= 30:
+            lengths = lengths[inner]
+    return float(np.std(lengths) / np.mean(lengths))
+
+
+def rev_for_spread(sigma_l: float, n_points: int = REV_POINTS, seed: int = 0) -> Mesh:
+    """Periodic sample with bond-length spread ``sigma_l`` (cached).
+
+    A periodic triangular lattice whose nodes are moved at random (the paper's way to
+    raise sigma_L), the amplitude found by bisection; a random periodic point set when
+    the spread exceeds what moves can reach.
+    """
+    from .meshgen import periodic_square
+
+    key = (round(sigma_l, 4), n_points, seed)
+    if key in _REV_CACHE:
+        return _REV_CACHE[key]
+    lat = periodic_square(n_points, kind="lattice", seed=seed)
+    best = lat
+    if sigma_l > lat.edge_length_spread() + 1e-3:
+        rnd = periodic_square(n_points, kind="random", seed=seed)
+        if sigma_l >= rnd.edge_length_spread():
+            best = rnd
+        else:
+            lo, hi = 0.0, 0.9 * lat.h
+            for _ in range(30):
+                amp = 0.5 * (lo + hi)
+                m = lat.perturbed(amp, seed=seed)
+                s = m.edge_length_spread()
+                best = m
+                if abs(s / sigma_l - 1) < 0.01:
+                    break
+                lo, hi = (amp, hi) if s < sigma_l else (lo, amp)
+    _REV_CACHE[key] = best
+    return best
+
+
+def relaxed_moduli(kind: str, rev: Mesh, nu_m: float, bonds: str = "uniform") -> dict:
+    """Equilibrium (relaxed) moduli of a periodic sample for ``k_n = 1`` and ``nu_m``.
+
+    For each unit macroscopic strain the periodic fluctuation that brings every node
+    into equilibrium is solved for; the mean stress gives the effective tensor, whose
+    isotropic part gives E and nu.
+
+    Returns
+    -------
+    dict
+        ``C`` (3x3 Mandel), ``E``, ``nu`` (for k_n = 1), ``stable`` (False if the
+        sample's stiffness is not positive definite), ``seconds``.
+    """
+    import time
+
+    from . import linalg
+    from .models import DV, RV
+    from .post import to_mandel, virial_stress
+
+    t0 = time.perf_counter()
+    cls = DV if kind == "DV" else RV
+    micro = MicroParameters(1.0, float(nu_m), "probe")
+    model = cls(rev, 1.0, 0.0, calibration=micro, bonds=bonds)
+    K = model._stiffness_bsr
+    # the fluctuation is periodic: pin one node against the two translations
+    system = linalg.ConstrainedSystem(K, np.array([0, 1]))
+    from .ordering import mesh_dof_order
+
+    lu = linalg.DirectSolver(system.A, order=mesh_dof_order(rev))
+    stable = lu.negative_pivots == 0
+    probes = [np.array([[1.0, 0.0], [0.0, 0.0]]), np.array([[0.0, 0.0], [0.0, 1.0]]),
+              np.array([[0.0, 1.0], [1.0, 0.0]]) / np.sqrt(2.0)]
+    cols = []
+    for eps in probes:
+        u_aff = rev.points @ eps.T  # with the period carrying eps: u = eps x + fluctuation
+        f = _macro_force(model, u_aff, eps)
+        b = system.rhs(-f, np.zeros(2))
+        x, _ = lu.solve(b)
+        u = u_aff + x.reshape(-1, 2)
+        cols.append(to_mandel(virial_stress(model, u, eps, linear=True)))
+    C = np.stack(cols, axis=1)
+    C = 0.5 * (C + C.T)
+    k2 = 0.25 * (C[0, 0] + C[1, 1] + 2 * C[0, 1])  # E / (2 (1 - nu))
+    g = 0.25 * (0.5 * (C[0, 0] + C[1, 1]) - C[0, 1] + C[2, 2])  # E / (2 (1 + nu))
+    return {"C": C, "E": 4 * k2 * g / (k2 + g), "nu": (k2 - g) / (k2 + g), "stable": stable,
+            "seconds": time.perf_counter() - t0}
+
+
+def _macro_force(model, u_aff: np.ndarray, eps: np.ndarray) -> np.ndarray:
+    """Nodal forces of the linear model under the affine field ``u_aff = eps x``."""
+    t = model.linear_tension(u_aff, strain=eps)
+    d = model.geometry.direction
+    b = model.mesh.topology.bonds
+    n = model.mesh.n_points
+    f = np.zeros((n, 2))
+    for c in range(2):
+        f[:, c] = np.bincount(b[:, 1], t * d[:, c], n) - np.bincount(b[:, 0], t * d[:, c], n)
+    return f.reshape(-1)
+
+
+def relaxed(kind: str, mesh: Mesh, E: float, nu: float, bonds: str = "uniform",
+            rev_points: int = REV_POINTS, seed: int = 0) -> MicroParameters:
+    """Micro-parameters for which the *relaxed* lattice matches E and nu.
+
+    Method: a periodic sample with the interior bond-length spread of ``mesh``
+    (:func:`rev_for_spread`) is probed with three unit strains; the fluctuations that
+    equilibrate it are solved for (one LU factorisation, three solves), giving the
+    relaxed Poisson's ratio ``nu_eff(nu_m)`` and modulus ``E_eff(nu_m)`` at ``k_n = 1``.
+    A secant root find on ``nu_eff(nu_m) = nu``, started from the paper's ``nu_m``,
+    gives ``nu_m``; then ``k_n = E / E_eff(nu_m)``. Typically 3-6 evaluations. Results
+    are cached per (model, bonds, spread, nu).
+
+    Raises
+    ------
+    ValueError
+        If nu cannot be reached with a stable sample (the message gives the range of
+        nu_eff found).
+    """
+    from . import geometry as _geometry
+
+    # the spread is quantised to 0.005 (nu_eff moves by < 1e-3): meshes of the same
+    # statistics share one calibration
+    sig = round(interior_spread(mesh) / SPREAD_STEP) * SPREAD_STEP
+    key = (kind, bonds, round(sig, 4), round(float(nu), 12), rev_points, seed)
+    hit = _RELAXED_CACHE.get(key)
+    if hit is not None:
+        nu_m, e_eff, details = hit
+        return MicroParameters(E / e_eff, nu_m, "relaxed", None, details["nu_range"], details)
+    rev = rev_for_spread(sig, rev_points, seed)
+    geom = _geometry.of(rev)
+    from .models import voronoi_weights
+
+    w = voronoi_weights(geom) if bonds == "voronoi" else None
+    start = paper(kind, rev, geom, 1.0, nu, w).nu_m if -1 < nu < 1 else 0.0
+    evals: dict[float, dict] = {}
+
+    def g(x):
+        x = float(x)
+        if x not in evals:
+            evals[x] = relaxed_moduli(kind, rev, x, bonds)
+        r = evals[x]
+        return r["nu"] - nu if r["stable"] else np.nan
+
+    def fail(reason):
+        ok = [r["nu"] for r in evals.values() if r["stable"]]
+        span = f"[{min(ok):.3f}, {max(ok):.3f}]" if ok else "none (every sample unstable)"
+        raise ValueError(
+            f"nu = {nu} has no relaxed {kind} calibration for a mesh of sigma_L = {sig:.3f}: "
+            f"{reason}; stable samples reached nu_eff in {span} ({len(evals)} evaluations)"
+        )
+
+    # bracket the root: nu_eff grows with nu_m; unstable samples are walls
+    x0, g0 = start, g(start)
+    if not np.isfinite(g0):
+        # move towards nu_m = 0 (the plain spring network is always stable)
+        lo, hi = (start, 0.0) if start < 0 else (0.0, start)
+        for _ in range(12):
+            mid = 0.5 * (lo + hi)
+            if np.isfinite(g(mid)):
+                x0, g0 = mid, g(mid)
+                if start < 0:
+                    hi = mid
+                else:
+                    lo = mid
+            elif start < 0:
+                lo = mid
+            else:
+                hi = mid
+        if not np.isfinite(g0):
+            g0 = g(0.0)
+            x0 = 0.0
+    step = 0.05 * (1.0 + abs(x0))
+    direction = 1.0 if g0 < 0 else -1.0
+    x1, g1 = x0, g0
+    for _ in range(10):
+        if abs(g1) < 1e-5:
+            break
+        x2 = x1 + direction * step
+        g2 = g(x2)
+        if not np.isfinite(g2):
+            # a stability wall between x1 and x2: approach it by bisection; the root may
+            # lie before it
+            stable_x, wall_x = x1, x2
+            for _ in range(8):
+                xm = 0.5 * (stable_x + wall_x)
+                gm = g(xm)
+                if not np.isfinite(gm):
+                    wall_x = xm
+                elif np.sign(gm) != np.sign(g1):
+                    x2, g2 = xm, gm
+                    break
+                else:
+                    stable_x = xm
+            if not np.isfinite(g2):
+                fail("it would need nu_m beyond the stability limit of the sample")
+        if np.sign(g2) != np.sign(g1):
+            from scipy.optimize import brentq
+
+            a_, b_ = sorted((x1, x2))
+            x1 = float(brentq(lambda t: g(t), a_, b_, xtol=1e-6, rtol=1e-9, maxiter=30))
+            g1 = g(x1)
+            break
+        x1, g1 = x2, g2
+        step *= 2.0
+    if not (np.isfinite(g1) and abs(g1) < 1e-4):
+        fail("no nu_m found")
+    r = evals[float(x1)]
+    ok = [e["nu"] for e in evals.values() if e["stable"]]
+    rng = (min(ok), max(ok))
+    details = {"sigma_L_mesh": sig, "sigma_L_sample": rev.edge_length_spread(),
+               "sample_points": rev.n_points, "evaluations": len(evals),
+               "solves": 3 * len(evals), "factorisations": len(evals),
+               "seconds": float(sum(e["seconds"] for e in evals.values())),
+               "E_eff_per_k_n": r["E"], "nu_range": rng,
+               "paper_nu_m": start}
+    _RELAXED_CACHE[key] = (x1, r["E"], details)
+    return MicroParameters(E / r["E"], x1, "relaxed", None, rng, details)

@@ -182,8 +182,14 @@ class DirectSolver:
             ) from None
         self.A = A
         self.negative_pivots: int | None = None
-        if symmetric and np.array_equal(self.lu.perm_r, self.lu.perm_c):
-            self.negative_pivots = int(np.count_nonzero(self.lu.U.diagonal() < 0))
+        if symmetric:
+            if np.array_equal(self.lu.perm_r, self.lu.perm_c):
+                self.negative_pivots = int(np.count_nonzero(self.lu.U.diagonal() < 0))
+            else:
+                # threshold pivoting left the diagonal: the matrix is not comfortably
+                # positive definite. Count the inertia with pure diagonal pivoting
+                # (symmetric elimination, Sylvester's law); keep the accurate factors.
+                self.negative_pivots = _inertia_negative(Ap, opts["permc_spec"])
         self.setup_seconds = time.perf_counter() - t0
 
     def solve(self, b: np.ndarray, x0: np.ndarray | None = None, rtol: float | None = None):
@@ -196,6 +202,18 @@ class DirectSolver:
         nb = float(np.linalg.norm(b)) or 1.0
         res = float(np.linalg.norm(self.A @ x - b)) / nb if np.all(np.isfinite(x)) else np.inf
         return x, {"iterations": 0, "residuals": [res]}
+
+
+def _inertia_negative(A: sp.spmatrix, permc_spec: str) -> int | None:
+    """Negative eigenvalues of symmetric ``A`` from an LU without off-diagonal pivots."""
+    try:
+        lu = spla.splu(sp.csc_matrix(A), permc_spec=permc_spec, diag_pivot_thresh=0.0,
+                       options=dict(SymmetricMode=True))
+    except RuntimeError:
+        return None
+    if not np.array_equal(lu.perm_r, lu.perm_c):
+        return None
+    return int(np.count_nonzero(lu.U.diagonal() < 0))
 
 
 class AMGSolver:

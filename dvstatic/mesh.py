@@ -29,6 +29,8 @@ __all__ = [
     "disc",
     "generate",
     "periodic_square",
+    "with_spread",
+    "lloyd",
     "KINDS",
 ]
 
@@ -473,7 +475,9 @@ from .meshgen import (  # noqa: E402
     KINDS,
     disc,
     generate,
+    lloyd,
     periodic_square,
     polygon,
     rectangle,
+    with_spread,
 )

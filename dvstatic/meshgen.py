@@ -6,7 +6,9 @@ Every generator places boundary nodes exactly on the boundary at spacing about `
 * ``lattice``: regular triangular lattice (rows ``h sqrt(3)/2`` apart);
 * ``jittered``: lattice nodes moved by up to ``jitter * h``, the move tapering off
   within about one spacing of the boundary (well-shaped boundary cells);
-* ``random``: uniformly distributed points of the same density,
+* ``random``: uniformly distributed points of the same density;
+* ``cvt``: random points moved by Lloyd iterations towards a centroidal Voronoi
+  tessellation (boundary nodes fixed): near-regular cells without lattice directions,
 
 and triangulates with :meth:`dvstatic.domain.Domain.triangulate` (Delaunay, conforming
 to the boundary, triangles outside the domain removed).
@@ -26,7 +28,10 @@ from .mesh import Mesh, _cross, _topology
 log = logging.getLogger(__name__)
 
 #: Mesh kinds understood by the generators.
-KINDS = ("lattice", "jittered", "random")
+KINDS = ("lattice", "jittered", "random", "cvt")
+
+#: Lloyd iterations of kind "cvt"
+CVT_ITERATIONS = 30
 
 SQRT3_2 = np.sqrt(3.0) / 2.0
 
@@ -78,7 +83,7 @@ def rectangle(
     if jitter >= 0.5:
         raise ValueError(f"jitter must be in [0, 0.5), got {jitter}")
     rng = np.random.default_rng(check_seed(seed))
-    if kind == "random":
+    if kind in ("random", "cvt"):
         pts = _random_rectangle_points(width, height, h, rng)
     else:
         pts, boundary, side_dir, side_step = _lattice_points(width, height, h)
@@ -86,6 +91,8 @@ def rectangle(
             _jitter_rectangle(pts, boundary, side_dir, side_step, width, height, h, jitter, rng)
     pts = pts[spatial_order(pts)]
     domain = rectangle_domain(width, height)
+    if kind == "cvt":
+        pts = lloyd(domain, pts, h)
     pts, tri, parts = domain.triangulate(pts, 1e-9 * h)
     mesh = Mesh(pts, tri, parts=parts, domain=domain)
     log.debug("rectangle %s: %r", kind, mesh)
@@ -131,7 +138,7 @@ def generate(
         raise ValueError(f"jitter must be in [0, 0.5), got {jitter}")
     rng = np.random.default_rng(check_seed(seed))
     bnd, seg_a, seg_b = _boundary_points(domain, h)
-    inner = _interior_points(domain, h, kind, jitter, rng)
+    inner = _interior_points(domain, h, "random" if kind == "cvt" else kind, jitter, rng)
     # Gabriel condition: no interior point inside the diametral circle of a boundary
     # segment, so that every segment is an edge of the Delaunay triangulation
     if len(inner):
@@ -144,6 +151,8 @@ def generate(
         inner = inner[~np.any(dist < half[idx] * (1 + 1e-9), axis=1)]
     pts = np.vstack([bnd, inner])
     pts = pts[spatial_order(pts)]
+    if kind == "cvt":
+        pts = lloyd(domain, pts, h)
     pts, tri, parts = domain.triangulate(pts, 1e-9 * h)
     mesh = Mesh(pts, tri, parts=parts, domain=domain)
     log.debug("generated %s mesh: %r", kind, mesh)
@@ -257,6 +266,118 @@ def _interior_points(domain: Domain, h: float, kind: str, jitter: float, rng) ->
         ok = domain.contains(trial) & (_distance_to_boundary(domain, trial) >= 0.3 * h)
         p[ok] = trial[ok]
     return p
+
+
+def lloyd(domain: Domain, points: np.ndarray, h: float,
+          iterations: int = CVT_ITERATIONS) -> np.ndarray:
+    """Lloyd relaxation: interior points move to the centroids of their Voronoi cells.
+
+    Boundary points (on a domain curve) stay. Cells are clipped to the triangulated
+    domain; their centroids are assembled from the sub-triangles (vertex, edge
+    midpoint, circumcentre) of every triangle, vectorised.
+
+    Parameters
+    ----------
+    domain : Domain
+    points : ndarray, shape (N, 2)
+    h : float
+        Spacing (sets the tolerance for "on the boundary").
+    iterations : int
+
+    Returns
+    -------
+    ndarray, shape (N, 2)
+    """
+    from .kinematics import circumcentres
+
+    p = np.array(points, dtype=float)
+    on_bnd = _distance_to_boundary(domain, p) <= 1e-9 * h
+    movable = np.flatnonzero(~on_bnd)
+    for _ in range(iterations):
+        tri = domain._delaunay(p)
+        x = p[tri]
+        cc = circumcentres(x)
+        n = len(p)
+        area = np.zeros(n)
+        moment = np.zeros((n, 2))
+        for k in range(3):
+            o, a = (k + 1) % 3, (k + 2) % 3
+            mid = 0.5 * (x[:, o] + x[:, a])
+            for v in (o, a):
+                xv = x[:, v]
+                sa = 0.5 * ((mid[:, 0] - xv[:, 0]) * (cc[:, 1] - xv[:, 1])
+                            - (mid[:, 1] - xv[:, 1]) * (cc[:, 0] - xv[:, 0]))
+                sa = np.abs(sa) * np.sign(
+                    (cc[:, 0] - mid[:, 0]) * (x[:, k, 0] - mid[:, 0])
+                    + (cc[:, 1] - mid[:, 1]) * (x[:, k, 1] - mid[:, 1]))
+                c = (xv + mid + cc) / 3.0
+                area += np.bincount(tri[:, v], sa, n)
+                for d in range(2):
+                    moment[:, d] += np.bincount(tri[:, v], sa * c[:, d], n)
+        ok = area[movable] > 1e-12 * h * h
+        idx = movable[ok]
+        target = moment[idx] / area[idx, None]
+        inside = domain.contains(target) & (_distance_to_boundary(domain, target) > 0.2 * h)
+        p[idx[inside]] = target[inside]
+    return p
+
+
+def with_spread(mesh: Mesh, sigma_l: float, seed: int | None = 0, rtol: float = 0.02,
+                max_evaluations: int = 24) -> Mesh:
+    """Randomly moved copy of ``mesh`` whose sigma_L is about ``sigma_l`` (paper exp. 3).
+
+    The perturbation amplitude of :meth:`Mesh.perturbed` is found by bisection.
+
+    Parameters
+    ----------
+    mesh : Mesh
+        A more regular mesh (lower sigma_L), generated in a domain.
+    sigma_l : float
+        Target std(l) / mean(l).
+    seed : int or None
+    rtol : float
+        Accepted relative deviation from the target.
+
+    Returns
+    -------
+    Mesh
+        Its reached value is ``mesh.edge_length_spread()`` (logged).
+
+    Raises
+    ------
+    ValueError
+        If the target is below the spread of ``mesh`` or cannot be reached.
+    """
+    sigma_l = check_positive("sigma_l", sigma_l)
+    s0 = mesh.edge_length_spread()
+    if sigma_l < s0 * (1 - rtol):
+        raise ValueError(f"target sigma_L = {sigma_l} is below the spread of the starting mesh "
+                         f"({s0:.4f}); start from a more regular mesh")
+    if sigma_l <= s0 * (1 + rtol):
+        return mesh
+    h = mesh.h
+    lo, hi = 0.0, 0.5 * h
+    best = (np.inf, mesh)
+    for _ in range(max_evaluations):
+        amp = 0.5 * (lo + hi)
+        m = mesh.perturbed(amp, seed=seed)
+        s = m.edge_length_spread()
+        if abs(s - sigma_l) < best[0]:
+            best = (abs(s - sigma_l), m)
+        if abs(s / sigma_l - 1) <= rtol:
+            break
+        if s < sigma_l:
+            lo = amp
+            if hi - amp < 1e-3 * h:
+                hi *= 2.0
+        else:
+            hi = amp
+    m = best[1]
+    reached = m.edge_length_spread()
+    log.info("with_spread: target sigma_L %.4f, reached %.4f", sigma_l, reached)
+    if abs(reached / sigma_l - 1) > 5 * rtol:
+        raise ValueError(f"could not reach sigma_L = {sigma_l} (best {reached:.4f})")
+    return m
 
 
 def periodic_square(

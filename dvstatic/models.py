@@ -34,7 +34,16 @@ from .mesh import Mesh
 
 log = logging.getLogger(__name__)
 
-__all__ = ["DV", "RV", "VoronoiModel"]
+__all__ = ["DV", "RV", "VoronoiModel", "voronoi_weights", "BONDS"]
+
+BONDS = ("uniform", "voronoi")
+#: floor of the Voronoi bond weight (a bond whose dual side vanishes keeps a spring)
+MIN_WEIGHT = 0.05
+
+
+def voronoi_weights(geom) -> np.ndarray:
+    """Bond weights ``sqrt(3) r / l`` (1 on the regular lattice), floored at 0.05."""
+    return np.maximum(np.sqrt(3.0) * geom.r / geom.length, MIN_WEIGHT)
 
 CHUNK = 1 << 18  # triangles per assembly chunk (bounds temporary memory)
 
@@ -50,14 +59,24 @@ class VoronoiModel:
         Young's modulus of the plane-stress continuum (force per area), > 0.
     nu : float
         Poisson's ratio, in the calibration's admissible range (within (-1, 1)).
-    calibration : {"paper"}
-        How ``k_n`` and ``nu_m`` are obtained from E and nu.
+    calibration : {"paper", "relaxed"} or MicroParameters
+        How ``k_n`` and ``nu_m`` are obtained from E and nu: ``"paper"`` (closed
+        form under affine strain, eqs. 9-10 / 19-20), ``"relaxed"`` (the equilibrium,
+        non-affinely relaxed response of a periodic sample with the mesh's bond-length
+        spread matches E and nu; see :func:`dvstatic.calibration.relaxed`), or given
+        :class:`~dvstatic.calibration.MicroParameters` (used as they are).
+    bonds : {"uniform", "voronoi"}
+        Normal-spring stiffness of each bond: the paper's uniform ``k_n``, or
+        ``k_n w_e`` with ``w_e = sqrt(3) r_e / l_e`` (its own Voronoi side: 1 inside a
+        regular lattice, 1/2 on its surface bonds), which removes the stiff surface
+        layer. The Voronoi coupling stays uniform, so the stiffness stays symmetric.
     """
 
     mesh: Mesh
     E: float
     nu: float
-    calibration: str = "paper"
+    calibration: object = "paper"
+    bonds: str = "uniform"
     kind: ClassVar[str] = ""
     barycentric_images: ClassVar[bool] = True
 
@@ -70,7 +89,9 @@ class VoronoiModel:
         nu = check_real("nu", self.nu)
         if not -1.0 < nu < 1.0:
             raise ValueError(f"nu must lie in the plane-stress range -1 < nu < 1, got {nu}")
-        check_choice("calibration", self.calibration, calibration.CALIBRATIONS)
+        if not isinstance(self.calibration, calibration.MicroParameters):
+            check_choice("calibration", self.calibration, calibration.CALIBRATIONS)
+        check_choice("bonds", self.bonds, BONDS)
         object.__setattr__(self, "E", E)
         object.__setattr__(self, "nu", nu)
         _ = self.micro  # calibrate now: an impossible nu fails at construction
@@ -84,7 +105,22 @@ class VoronoiModel:
     @cached_property
     def micro(self) -> calibration.MicroParameters:
         """Calibrated micro-parameters with the moments they came from."""
-        return calibration.paper(self.kind, self.mesh, self.geometry, self.E, self.nu)
+        if isinstance(self.calibration, calibration.MicroParameters):
+            return self.calibration
+        if self.calibration == "relaxed":
+            return calibration.relaxed(self.kind, self.mesh, self.E, self.nu, self.bonds)
+        return calibration.paper(self.kind, self.mesh, self.geometry, self.E, self.nu,
+                                 self.bond_weight)
+
+    @cached_property
+    def bond_weight(self) -> np.ndarray:
+        """Relative normal-spring stiffness of every bond, shape (E,) (ones if uniform)."""
+        if self.bonds == "uniform":
+            w = np.ones(self.mesh.n_bonds)
+        else:
+            w = voronoi_weights(self.geometry)
+        w.setflags(write=False)
+        return w
 
     @property
     def k_n(self) -> float:
@@ -152,7 +188,7 @@ class VoronoiModel:
         length = np.hypot(d[:, 0], d[:, 1])
         if np.any(length <= 0):
             raise ValueError("a bond has collapsed to zero length in this displacement")
-        stretch = length - g.length
+        stretch = self.bond_weight * (length - g.length)
         if self.nu_m != 0.0:
             r_now = np.zeros(len(g.length))
             topo = self.mesh.topology
@@ -191,7 +227,8 @@ class VoronoiModel:
             b[:, k, O_OF[k]] = -n[:, k]
             b[:, k, A_OF[k]] = n[:, k]
         b = b.reshape(m, 3, 6)
-        q = g.tri_weight[sl][..., None] * b
+        w = g.tri_weight[sl] * self.bond_weight[self.mesh.topology.tri_bonds[sl]]
+        q = w[..., None] * b
         if self.nu_m != 0.0:
             _, dr = half_sides(y, self._bary(sl), grad=True)
             q = q + self.nu_m * dr
@@ -268,7 +305,7 @@ class VoronoiModel:
         du = u[b[:, 1]] - u[b[:, 0]]
         if strain is not None:
             du = du + (topo.bond_image * self.mesh.period) @ strain.T
-        t = np.einsum("ei,ei->e", g.direction, du)
+        t = self.bond_weight * np.einsum("ei,ei->e", g.direction, du)
         if self.nu_m != 0.0:
             dr_sum = np.zeros(len(t))
             for sl in _chunks(self.mesh.n_triangles):
@@ -286,7 +323,8 @@ class VoronoiModel:
     def __repr__(self) -> str:
         return (
             f"{self.kind}(N={self.mesh.n_points}, E={self.E:g}, nu={self.nu:g}, "
-            f"k_n={self.k_n:.6g}, nu_m={self.nu_m:.6g}, calibration={self.calibration!r})"
+            f"k_n={self.k_n:.6g}, nu_m={self.nu_m:.6g}, calibration={self.micro.calibration!r}, "
+            f"bonds={self.bonds!r})"
         )
 
 

@@ -62,12 +62,8 @@ SCHEMA: dict[str, F] = {
                 "string", "domain", required=True, choices=("rectangle", "polygon", "disc", "file")
             ),
             "h": F("number", "node spacing (length); required except for type = file"),
-            "kind": F(
-                "string",
-                "interior points",
-                default="jittered",
-                choices=("lattice", "jittered", "random"),
-            ),
+            "kind": F("string", "interior points", default="jittered",
+                      choices=("lattice", "jittered", "random", "cvt")),
             "jitter": F("number", "relative jitter of kind = jittered, in [0, 0.5)", default=0.3),
             "seed": F("int", "random seed", default=0),
             "width": F(
@@ -106,9 +102,13 @@ SCHEMA: dict[str, F] = {
                 default="DV",
                 choices=("DV", "RV"),
             ),
-            "calibration": F(
-                "string", "micro-parameter calibration", default="paper", choices=("paper",)
-            ),
+            "calibration": F("string", "micro-parameters: paper (closed form, affine strain) or "
+                             "relaxed (matches E and nu in equilibrium on a periodic sample "
+                             "with the mesh's bond-length spread)", default="paper",
+                             choices=("paper", "relaxed")),
+            "bonds": F("string", "normal-spring stiffness: uniform (the paper's k_n) or "
+                       "voronoi (k_n sqrt(3) r/l: no stiff surface layer)", default="uniform",
+                       choices=("uniform", "voronoi")),
         },
     ),
     "supports": F(
@@ -485,7 +485,8 @@ class Scene:
         cls = DV if self.data["model"]["type"] == "DV" else RV
         mat = self.data["material"]
         try:
-            return cls(mesh, mat["E"], mat["nu"], calibration=self.data["model"]["calibration"])
+            return cls(mesh, mat["E"], mat["nu"], calibration=self.data["model"]["calibration"],
+                       bonds=self.data["model"]["bonds"])
         except ValueError as exc:
             raise self._err("material.nu" if "nu" in str(exc) else "material", exc) from None
 

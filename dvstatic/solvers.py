@@ -15,6 +15,10 @@ from .loads import constraints, load_vector
 from .models import VoronoiModel
 from .newton import NewtonOptions, _residual, solve_nonlinear
 from .ordering import mesh_dof_order
+from .stability import CHECK_MAX_DOF
+
+#: the refusal message includes the admissible nu range up to this many dofs
+RANGE_IN_MESSAGE_MAX_DOF = 20_000
 
 log = logging.getLogger(__name__)
 
@@ -102,6 +106,7 @@ def solve(
     line_search: bool = True,
     allow_unstable: bool = False,
     progress: bool = False,
+    check_stability: bool = True,
 ) -> Solution:
     """Solve the static problem: linear ``K u = f``, or geometrically exact equilibrium.
 
@@ -143,6 +148,13 @@ def solve(
         negative pivots (otherwise they raise: buckling or a limit point).
     progress : bool
         Nonlinear: show a progress bar of the load factor on stderr (tqdm).
+    check_stability : bool
+        Linear: refuse a stiffness that is not positive definite (an unstable lattice).
+        With the direct solver the factorisation's inertia gives this for free; with
+        AMG, systems up to :data:`dvstatic.stability.CHECK_MAX_DOF` dofs get one extra
+        factorisation (its cost is ``info["stability"]["seconds"]``), larger ones rely
+        on CG's negative-curvature test. The error gives the admissible nu range for
+        systems up to 20,000 dofs.
 
     Returns
     -------
@@ -241,11 +253,25 @@ def solve(
         engine = linalg.AMGSolver(system.A, linalg.rigid_modes(mesh.points))
     seconds["setup"] = time.perf_counter() - t0
 
-    if kind == "direct" and engine.negative_pivots:
-        raise linalg.SolverError(
-            _unstable_message(model, engine.negative_pivots),
-            {"solver": kind, "negative_pivots": engine.negative_pivots},
-        )
+    stab = {"checked": False, "method": "none", "negative_eigenvalues": None, "seconds": 0.0}
+    if check_stability:
+        t_st = time.perf_counter()
+        if kind == "direct":
+            stab.update(checked=engine.negative_pivots is not None, method="ldl-inertia",
+                        negative_eigenvalues=engine.negative_pivots)
+        elif n <= CHECK_MAX_DOF:
+            probe = linalg.DirectSolver(system.A, order=mesh_dof_order(mesh))
+            stab.update(checked=probe.negative_pivots is not None, method="ldl-inertia",
+                        negative_eigenvalues=probe.negative_pivots)
+            del probe
+        else:
+            stab.update(method="cg-curvature")
+        stab["seconds"] = time.perf_counter() - t_st
+        if stab["negative_eigenvalues"]:
+            raise linalg.SolverError(
+                _unstable_message(model, stab["negative_eigenvalues"], supports_l),
+                {"solver": kind, "stability": stab},
+            )
     t0 = time.perf_counter()
     if kind == "direct":
         x, sinfo = engine.solve(b)
@@ -261,9 +287,10 @@ def solve(
         "iterations": sinfo["iterations"],
         "residuals": sinfo["residuals"],
     }
+    info["stability"] = stab
     if sinfo.get("indefinite"):
         info["converged"] = False
-        raise linalg.SolverError(_unstable_message(model, None), info)
+        raise linalg.SolverError(_unstable_message(model, None, supports_l), info)
     residual = sinfo["residuals"][-1]
     limit = 1e-8 if kind == "direct" else max(10 * rtol, 1e-14)
     if not np.all(np.isfinite(x)) or not residual <= limit:
@@ -297,15 +324,27 @@ def solve(
     return Solution(model, u, reactions.reshape(-1, 2), info, supports_l, loads_l)
 
 
-def _unstable_message(model: VoronoiModel, count: int | None) -> str:
+def _unstable_message(model: VoronoiModel, count: int | None, supports) -> str:
     what = f"{count} negative eigenvalue(s)" if count else "a negative curvature direction"
-    return (
+    msg = (
         f"the {model.kind} stiffness with these supports is not positive definite ({what}): "
         f"the lattice is unstable for nu = {model.nu} (nu_m = {model.nu_m:.4g}) on this mesh, "
-        "so its equilibrium would not be a physical solution. Irregular meshes (obtuse "
-        "triangles) shrink the stable nu range, DV more than RV; use a more regular mesh "
-        "(lattice or jittered with less jitter), or the RV model"
+        "so its equilibrium would not be a physical solution"
     )
+    if 2 * model.mesh.n_points <= RANGE_IN_MESSAGE_MAX_DOF:
+        from .stability import stability
+
+        try:
+            rep = stability(model, supports)
+            msg += (f"; admissible for this mesh and these supports: nu_m in "
+                    f"({rep.nu_m_range[0]:.4g}, {rep.nu_m_range[1]:.4g}), i.e. nu in "
+                    f"({rep.nu_range[0]:.4g}, {rep.nu_range[1]:.4g})")
+        except Exception as exc:  # the range is a courtesy; the refusal stands
+            log.warning("stability range not computed: %s", exc)
+    else:
+        msg += "; call dv.stability(model, supports) for the admissible nu range"
+    return msg + (". Irregular meshes (obtuse triangles) shrink the stable range, DV more "
+                  "than RV: use a more regular mesh (lattice, cvt) or the RV model")
 
 
 def _unit_interval(name: str, value) -> float:

@@ -81,3 +81,27 @@ def test_fig10(out):
     assert rv[-1] > 3 * rv[0]
     dv_stable = [s["DV_mean"] for s in summ if s["DV_mean"] is not None]
     assert dv_stable[-1] > 3 * dv_stable[0]
+
+
+def test_fig10_relaxed_flattens_the_error(out):
+    d = json.loads((out / "fig10.json").read_text())
+    paper = [s["RV_mean"] for s in d["runs"]["paper"]["summary"]]
+    relaxed = [s["RV_mean"] for s in d["runs"]["relaxed"]["summary"]]
+    # the relaxed calibration removes most of the growth with sigma_L
+    assert relaxed[-1] - relaxed[0] < 0.3 * (paper[-1] - paper[0])
+    assert len(d["runs"]["paper"]["cvt"]) == 3
+
+
+def test_stability_sweep(out):
+    _run("stability_sweep", out)
+    d = json.loads((out / "stability_sweep.json").read_text())
+    assert (out / "stability_sweep.png").stat().st_size > 1000
+    status = {(c["mesh"], c["model"], c["calibration"], c["nu"]): c for c in d["cases"]}
+    # every case either solved with a tiny residual or reported with its range
+    for c in d["cases"]:
+        if c["status"] == "solved":
+            assert c["residual"] <= 1e-10
+        elif c["status"] == "unstable":
+            assert len(c["nu_range"]) == 2
+    assert status[("lattice", "RV", "paper", 0.2)]["status"] == "solved"
+    assert status[("random", "DV", "paper", 0.2)]["status"] == "unstable"
