@@ -22,6 +22,41 @@ from .stability import stability
 
 __version__ = "0.1.0"
 
+#: submodules loaded on first use (``dv.io``, ``dv.plot``, ...): their optional
+#: dependencies (meshio, matplotlib) stay out of ``import dvstatic``
+_LAZY_SUBMODULES = frozenset(
+    {
+        "assembly",
+        "calibration",
+        "cli",
+        "distributed",
+        "domain",
+        "geometry",
+        "io",
+        "kinematics",
+        "linalg",
+        "meshgen",
+        "models",
+        "newton",
+        "ordering",
+        "petsc_solve",
+        "plot",
+        "post",
+        "relaxation",
+        "scene",
+        "solvers",
+    }
+)
+
+
+def __getattr__(name: str):
+    if name in _LAZY_SUBMODULES:
+        import importlib
+
+        return importlib.import_module(f".{name}", __name__)
+    raise AttributeError(f"module 'dvstatic' has no attribute {name!r}")
+
+
 __all__ = [
     "mesh",
     "fem",

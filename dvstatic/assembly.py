@@ -11,11 +11,15 @@ from __future__ import annotations
 
 import weakref
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-import scipy.sparse as sp
 
 from .mesh import Mesh
+
+if TYPE_CHECKING:  # annotations only: scipy is imported where it is used
+    import scipy.sparse as sp
+
 
 __all__ = ["BlockPattern", "pattern", "assemble", "accumulate", "assemble_vector", "triangle_dofs"]
 
@@ -57,6 +61,8 @@ def pattern(mesh: Mesh) -> BlockPattern:
 
 
 def _build(mesh: Mesh) -> BlockPattern:
+    import scipy.sparse as sp
+
     topo = mesh.topology
     n = mesh.n_points
     o, a = topo.bonds[:, 0], topo.bonds[:, 1]
@@ -107,6 +113,8 @@ def assemble(pat: BlockPattern, ke: np.ndarray) -> sp.bsr_matrix:
     ke : ndarray, shape (M, 6, 6)
         Triangle matrices on the interleaved dofs ``[x0, y0, x1, y1, x2, y2]``.
     """
+    import scipy.sparse as sp
+
     m = ke.shape[0]
     blocks = ke.reshape(m, 3, 2, 3, 2).transpose(0, 1, 3, 2, 4).reshape(m * 9, 4)
     data = np.empty((pat.nnzb, 4))

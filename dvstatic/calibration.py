@@ -30,8 +30,19 @@ from .geometry import Geometry
 from .kinematics import half_sides
 from .mesh import Mesh
 
-__all__ = ["MicroParameters", "Moments", "moments", "paper", "relaxed", "admissible_nu",
-           "relaxed_moduli", "CALIBRATIONS"]
+__all__ = [
+    "MicroParameters",
+    "Moments",
+    "moments",
+    "moment_sums",
+    "moments_from_sums",
+    "paper",
+    "paper_from_moments",
+    "relaxed",
+    "admissible_nu",
+    "relaxed_moduli",
+    "CALIBRATIONS",
+]
 
 CALIBRATIONS = ("paper", "relaxed")
 
@@ -76,19 +87,22 @@ class MicroParameters:
             raise ValueError(f"nu_m must be finite, got {self.nu_m}")
 
 
-def moments(kind: str, mesh: Mesh, geom: Geometry, weights=None) -> Moments:
-    """alpha, beta, M1, M2 of ``mesh`` for model ``kind`` ("DV" or "RV").
+def moment_sums(kind: str, geom: Geometry, weights=None, bond_mask=None, tri_mask=None):
+    """Raw sums behind :func:`moments` over the selected bonds and triangles.
 
-    ``weights`` (E,) are the relative normal-spring stiffnesses (``bonds="voronoi"``);
-    they enter alpha = sum w l^2 / (8 A) only, since the coupling is not weighted.
+    Returns ``[sum w l^2, sum l r, S1, S2]`` (length^2), where ``S1 = M1 * 8A`` and
+    ``S2 = M2 * 8A`` (for DV ``S1 = sum l r``, ``S2 = 3 sum l r``). With masks, sums
+    over disjoint sets of bonds and triangles add up: that is how the distributed
+    solver calibrates across ranks.
     """
-    area = mesh.area
-    w = np.ones(len(geom.length)) if weights is None else np.asarray(weights)
-    alpha = float(np.sum(w * geom.length**2) / (8 * area))
-    beta = float(np.sum(geom.length * geom.r) / (8 * area))
+    length, r = geom.length, geom.r
+    w = np.ones(len(length)) if weights is None else np.asarray(weights)
+    bm = slice(None) if bond_mask is None else bond_mask
+    s_alpha = float(np.sum(w[bm] * length[bm] ** 2))
+    s_beta = float(np.sum(length[bm] * r[bm]))
     if kind == "DV":
-        return Moments(alpha, beta, beta, 3 * beta)
-    x = geom.x_tri
+        return np.array([s_alpha, s_beta, s_beta, 3 * s_beta])
+    x = geom.x_tri if tri_mask is None else geom.x_tri[tri_mask]
     _, dr = half_sides(x, None, grad=True)
     m = len(x)
     # R_Tk = sym(sum_v dr_v (x) x_v): linear map from a homogeneous strain to delta r_Tk
@@ -98,9 +112,48 @@ def moments(kind: str, mesh: Mesh, geom: Geometry, weights=None) -> Moments:
     ll = np.hypot(d[..., 0], d[..., 1])
     n = d / ll[..., None]
     rho = np.einsum("mki,mkij,mkj->mk", n, R, n)
-    m1 = float(np.sum(ll * (tau + 2 * rho)) / (8 * area))
-    m2 = float(np.sum(ll * (3 * tau - 2 * rho)) / (8 * area))
-    return Moments(alpha, beta, m1, m2)
+    return np.array(
+        [
+            s_alpha,
+            s_beta,
+            float(np.sum(ll * (tau + 2 * rho))),
+            float(np.sum(ll * (3 * tau - 2 * rho))),
+        ]
+    )
+
+
+def moments_from_sums(sums, area: float) -> Moments:
+    """:class:`Moments` from :func:`moment_sums` (added over all parts) and the area."""
+    s = np.asarray(sums, dtype=float) / (8.0 * area)
+    return Moments(float(s[0]), float(s[1]), float(s[2]), float(s[3]))
+
+
+def paper_from_moments(kind: str, mom: Moments, E: float, nu: float) -> MicroParameters:
+    """The paper's closed form (eqs. 9-10 / 19-20) for given lattice moments.
+
+    Raises
+    ------
+    ValueError
+        If nu lies outside the interval where the calibration has a solution.
+    """
+    lo, hi = admissible_nu(mom)
+    if not (lo < nu < hi):
+        raise ValueError(
+            f"nu = {nu} has no {kind} calibration on this mesh: the accepted range is "
+            f"{lo:.4g} < nu < {hi:.4g}"
+        )
+    k_n = E * (mom.m2 - nu * mom.m1) / (mom.alpha * (1 - nu**2) * (3 * mom.m2 - mom.m1))
+    nu_m = mom.alpha * (1 - 3 * nu) / (nu * mom.m1 - mom.m2)
+    return MicroParameters(float(k_n), float(nu_m), "paper", mom, (lo, hi))
+
+
+def moments(kind: str, mesh: Mesh, geom: Geometry, weights=None) -> Moments:
+    """alpha, beta, M1, M2 of ``mesh`` for model ``kind`` ("DV" or "RV").
+
+    ``weights`` (E,) are the relative normal-spring stiffnesses (``bonds="voronoi"``);
+    they enter alpha = sum w l^2 / (8 A) only, since the coupling is not weighted.
+    """
+    return moments_from_sums(moment_sums(kind, geom, weights), mesh.area)
 
 
 def admissible_nu(mom: Moments) -> tuple[float, float]:
@@ -124,8 +177,9 @@ def admissible_nu(mom: Moments) -> tuple[float, float]:
     return (lo, hi)
 
 
-def paper(kind: str, mesh: Mesh, geom: Geometry, E: float, nu: float,
-          weights=None) -> MicroParameters:
+def paper(
+    kind: str, mesh: Mesh, geom: Geometry, E: float, nu: float, weights=None
+) -> MicroParameters:
     """Closed-form calibration of the paper (eqs. 9-10 for DV, 19-20 for RV).
 
     Raises
@@ -133,16 +187,7 @@ def paper(kind: str, mesh: Mesh, geom: Geometry, E: float, nu: float,
     ValueError
         If nu lies outside the interval where the calibration has a solution.
     """
-    mom = moments(kind, mesh, geom, weights)
-    lo, hi = admissible_nu(mom)
-    if not (lo < nu < hi):
-        raise ValueError(
-            f"nu = {nu} has no {kind} calibration on this mesh: the accepted range is "
-            f"{lo:.4g} < nu < {hi:.4g}"
-        )
-    k_n = E * (mom.m2 - nu * mom.m1) / (mom.alpha * (1 - nu**2) * (3 * mom.m2 - mom.m1))
-    nu_m = mom.alpha * (1 - 3 * nu) / (nu * mom.m1 - mom.m2)
-    return MicroParameters(float(k_n), float(nu_m), "paper", mom, (lo, hi))
+    return paper_from_moments(kind, moments(kind, mesh, geom, weights), E, nu)
 
 
 # --------------------------------------------------------------------- relaxed
@@ -229,8 +274,11 @@ def relaxed_moduli(kind: str, rev: Mesh, nu_m: float, bonds: str = "uniform") ->
 
     lu = linalg.DirectSolver(system.A, order=mesh_dof_order(rev))
     stable = lu.negative_pivots == 0
-    probes = [np.array([[1.0, 0.0], [0.0, 0.0]]), np.array([[0.0, 0.0], [0.0, 1.0]]),
-              np.array([[0.0, 1.0], [1.0, 0.0]]) / np.sqrt(2.0)]
+    probes = [
+        np.array([[1.0, 0.0], [0.0, 0.0]]),
+        np.array([[0.0, 0.0], [0.0, 1.0]]),
+        np.array([[0.0, 1.0], [1.0, 0.0]]) / np.sqrt(2.0),
+    ]
     cols = []
     for eps in probes:
         u_aff = rev.points @ eps.T  # with the period carrying eps: u = eps x + fluctuation
@@ -243,8 +291,13 @@ def relaxed_moduli(kind: str, rev: Mesh, nu_m: float, bonds: str = "uniform") ->
     C = 0.5 * (C + C.T)
     k2 = 0.25 * (C[0, 0] + C[1, 1] + 2 * C[0, 1])  # E / (2 (1 - nu))
     g = 0.25 * (0.5 * (C[0, 0] + C[1, 1]) - C[0, 1] + C[2, 2])  # E / (2 (1 + nu))
-    return {"C": C, "E": 4 * k2 * g / (k2 + g), "nu": (k2 - g) / (k2 + g), "stable": stable,
-            "seconds": time.perf_counter() - t0}
+    return {
+        "C": C,
+        "E": 4 * k2 * g / (k2 + g),
+        "nu": (k2 - g) / (k2 + g),
+        "stable": stable,
+        "seconds": time.perf_counter() - t0,
+    }
 
 
 def _macro_force(model, u_aff: np.ndarray, eps: np.ndarray) -> np.ndarray:
@@ -259,8 +312,16 @@ def _macro_force(model, u_aff: np.ndarray, eps: np.ndarray) -> np.ndarray:
     return f.reshape(-1)
 
 
-def relaxed(kind: str, mesh: Mesh, E: float, nu: float, bonds: str = "uniform",
-            rev_points: int = REV_POINTS, seed: int = 0) -> MicroParameters:
+def relaxed(
+    kind: str,
+    mesh: Mesh,
+    E: float,
+    nu: float,
+    bonds: str = "uniform",
+    rev_points: int = REV_POINTS,
+    seed: int = 0,
+    spread: float | None = None,
+) -> MicroParameters:
     """Micro-parameters for which the *relaxed* lattice matches E and nu.
 
     Method: a periodic sample with the interior bond-length spread of ``mesh``
@@ -269,7 +330,8 @@ def relaxed(kind: str, mesh: Mesh, E: float, nu: float, bonds: str = "uniform",
     relaxed Poisson's ratio ``nu_eff(nu_m)`` and modulus ``E_eff(nu_m)`` at ``k_n = 1``.
     A secant root find on ``nu_eff(nu_m) = nu``, started from the paper's ``nu_m``,
     gives ``nu_m``; then ``k_n = E / E_eff(nu_m)``. Typically 3-6 evaluations. Results
-    are cached per (model, bonds, spread, nu).
+    are cached per (model, bonds, spread, nu). ``spread`` overrides the interior
+    sigma_L of ``mesh`` (the distributed solver computes it across ranks).
 
     Raises
     ------
@@ -281,7 +343,8 @@ def relaxed(kind: str, mesh: Mesh, E: float, nu: float, bonds: str = "uniform",
 
     # the spread is quantised to 0.005 (nu_eff moves by < 1e-3): meshes of the same
     # statistics share one calibration
-    sig = round(interior_spread(mesh) / SPREAD_STEP) * SPREAD_STEP
+    raw = interior_spread(mesh) if spread is None else float(spread)
+    sig = round(raw / SPREAD_STEP) * SPREAD_STEP
     key = (kind, bonds, round(sig, 4), round(float(nu), 12), rev_points, seed)
     hit = _RELAXED_CACHE.get(key)
     if hit is not None:
@@ -368,11 +431,17 @@ def relaxed(kind: str, mesh: Mesh, E: float, nu: float, bonds: str = "uniform",
     r = evals[float(x1)]
     ok = [e["nu"] for e in evals.values() if e["stable"]]
     rng = (min(ok), max(ok))
-    details = {"sigma_L_mesh": sig, "sigma_L_sample": rev.edge_length_spread(),
-               "sample_points": rev.n_points, "evaluations": len(evals),
-               "solves": 3 * len(evals), "factorisations": len(evals),
-               "seconds": float(sum(e["seconds"] for e in evals.values())),
-               "E_eff_per_k_n": r["E"], "nu_range": rng,
-               "paper_nu_m": start}
+    details = {
+        "sigma_L_mesh": sig,
+        "sigma_L_sample": rev.edge_length_spread(),
+        "sample_points": rev.n_points,
+        "evaluations": len(evals),
+        "solves": 3 * len(evals),
+        "factorisations": len(evals),
+        "seconds": float(sum(e["seconds"] for e in evals.values())),
+        "E_eff_per_k_n": r["E"],
+        "nu_range": rng,
+        "paper_nu_m": start,
+    }
     _RELAXED_CACHE[key] = (x1, r["E"], details)
     return MicroParameters(E / r["E"], x1, "relaxed", None, rng, details)

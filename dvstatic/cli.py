@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import argparse
 import logging
+import os
+import shutil
 import subprocess
 import sys
 import time
@@ -89,6 +91,8 @@ def _run(args: argparse.Namespace) -> int:
         sol = dv.solve(model, supports, loads, progress=_show_progress(args), **sc.solve_options())
     except ValueError as exc:  # e.g. supports that leave a rigid motion free
         raise scene.SceneError(sc.path, "supports", str(exc)) from None
+    if sol.u is None:  # an MPI rank other than 0 of a solver="petsc" run: rank 0 writes
+        return 0
     o = sc.data["output"]
     fe = None
     if o["fe_compare"]:
@@ -96,30 +100,35 @@ def _run(args: argparse.Namespace) -> int:
         fe = dv.fem.solve(
             mesh, mat["E"], mat["nu"], supports, loads, order=o["fe_order"], refine=o["fe_refine"]
         )
-    out_dir.mkdir(parents=True, exist_ok=True)
-    written: list[Path] = []
+    for i, name in enumerate(o["part_stress"]):
+        if name not in mesh.parts:
+            raise scene.SceneError(
+                sc.path,
+                f"output.part_stress[{i}]",
+                f"unknown boundary part {name!r}; known parts: "
+                + ", ".join(repr(k) for k in mesh.parts),
+            )
+    # everything is written into a staging folder next to the target and swapped in only
+    # when complete: an interrupted or failed run leaves earlier results as they were
+    out_dir.parent.mkdir(parents=True, exist_ok=True)
+    stage = out_dir.parent / f".{out_dir.name}.staging-{os.getpid()}"
+    shutil.rmtree(stage, ignore_errors=True)
+    stage.mkdir()
+    written: list[str] = []
     try:
         if o["vtu"]:
-            written.append(io.write_vtu(out_dir / f"{sc.name}.vtu", sol))
+            written.append(io.write_vtu(stage / f"{sc.name}.vtu", sol).name)
         if o["png"]:
             written.append(
                 io.write_png(
-                    out_dir / f"{sc.name}.png",
+                    stage / f"{sc.name}.png",
                     sol,
                     field=o["field"],
                     scale=o["scale"],
                     title=sc.data["title"] or None,
                     stress=o["stress"],
-                )
+                ).name
             )
-        for i, name in enumerate(o["part_stress"]):
-            if name not in mesh.parts:
-                raise scene.SceneError(
-                    sc.path,
-                    f"output.part_stress[{i}]",
-                    f"unknown boundary part {name!r}; known parts: "
-                    + ", ".join(repr(k) for k in mesh.parts),
-                )
         data = io.summary(sol, fe=fe, probes=o["probes"] or None, part_stress=o["part_stress"])
         data["scene"] = {
             "file": str(sc.path),
@@ -128,15 +137,40 @@ def _run(args: argparse.Namespace) -> int:
         }
         data["seconds_total"] = time.perf_counter() - t0
         if o["json"]:
-            written.append(io.write_json(out_dir / f"{sc.name}.json", data))
+            written.append(io.write_json(stage / f"{sc.name}.json", data).name)
+        _swap_in(stage, out_dir)
     except BaseException:
-        if written:
-            print(
-                "written before the interruption: " + ", ".join(map(str, written)), file=sys.stderr
-            )
+        shutil.rmtree(stage, ignore_errors=True)
+        state = "left unchanged" if out_dir.exists() else "not created"
+        print(
+            f"stopped before the outputs were complete: nothing was written ({out_dir} {state})",
+            file=sys.stderr,
+        )
         raise
-    _print_summary(sc, data, written)
+    _print_summary(sc, data, [out_dir / w for w in written])
+    if sol.info.get("converged") is False:
+        print(
+            f"warning: the solution did NOT converge (best effort): {sol.info.get('failure')}",
+            file=sys.stderr,
+        )
+        return 4
     return 0
+
+
+def _swap_in(stage: Path, out_dir: Path) -> None:
+    """Replace ``out_dir`` by the complete ``stage`` folder (renames only)."""
+    old = None
+    if out_dir.exists():
+        old = out_dir.parent / f".{out_dir.name}.previous-{os.getpid()}"
+        os.replace(out_dir, old)
+    try:
+        os.replace(stage, out_dir)
+    except BaseException:
+        if old is not None:
+            os.replace(old, out_dir)
+        raise
+    if old is not None:
+        shutil.rmtree(old, ignore_errors=True)
 
 
 def _print_summary(sc, d: dict, written: list[Path]) -> None:
@@ -152,8 +186,9 @@ def _print_summary(sc, d: dict, written: list[Path]) -> None:
         (
             "solver",
             f"{s['solver']}{' (nonlinear)' if s.get('nonlinear') else ''}, "
-            f"{s['iterations']} iterations, residual {s['residual']:.2e}, "
-            f"{s['seconds']['total']:.3f} s",
+            f"{s.get('iterations', '?')} iterations, "
+            f"residual {s.get('residual', float('nan')):.2e}, "
+            f"{s.get('seconds', {}).get('total', float('nan')):.3f} s",
         ),
         ("max |u|", f"{d['max_displacement']:.6e}"),
     ]

@@ -13,7 +13,6 @@ import logging
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial import Delaunay
 
 log = logging.getLogger(__name__)
 
@@ -289,6 +288,8 @@ class Domain:
         return points, tri, {n: np.concatenate(v) for n, v in parts.items()}
 
     def _delaunay(self, points: np.ndarray) -> np.ndarray:
+        from scipy.spatial import Delaunay
+
         tri = Delaunay(points).simplices.astype(np.int64)
         x = points[tri]
         a2 = _cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])

@@ -19,15 +19,19 @@ from __future__ import annotations
 import logging
 import time
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-import scipy.sparse as sp
 
 from ._checks import check_int, check_positive, check_real
 from .linalg import DirectSolver, SolverError
 from .loads import BodyForce, Fix, PointLoad, Traction, as_list, select_edges, select_nodes
 from .mesh import Mesh
 from .ordering import nested_dissection
+
+if TYPE_CHECKING:  # annotations only: scipy is imported where it is used
+    import scipy.sparse as sp
+
 
 log = logging.getLogger(__name__)
 
@@ -261,6 +265,8 @@ def solve(
 
 def _solve_spd(A: sp.spmatrix, b: np.ndarray, locs: np.ndarray) -> np.ndarray:
     """Direct solve with a nested-dissection ordering on the dof locations."""
+    import scipy.sparse as sp
+
     A = sp.csr_matrix(A)
     coo = sp.triu(A, k=1).tocoo()
     order = nested_dissection(locs + 1e-12 * np.arange(len(locs))[:, None], np.c_[coo.row, coo.col])

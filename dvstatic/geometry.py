@@ -29,6 +29,9 @@ __all__ = ["Geometry", "of", "is_cached"]
 
 _CACHE: weakref.WeakKeyDictionary[Mesh, Geometry] = weakref.WeakKeyDictionary()
 
+#: a half side larger than this many times its bond flags a near-degenerate triangle
+SLIVER_WARNING = 1e3
+
 
 @dataclass(frozen=True, eq=False)
 class Geometry:
@@ -140,4 +143,13 @@ def _compute(mesh: Mesh) -> Geometry:
         if isinstance(arr, np.ndarray):
             arr.setflags(write=False)
     log.debug("geometry of %r in %.3f s", mesh, g.seconds)
+    worst = float(np.max(np.abs(tri_r) / tri_l))
+    if worst > SLIVER_WARNING:
+        i = int(np.argmax(np.max(np.abs(tri_r) / tri_l, axis=1)))
+        log.warning(
+            "near-degenerate triangle %d (a half side %.3g times its bond): its circumcentre is "
+            "far away; expect ill-conditioning, and DV to be unstable there",
+            i,
+            worst,
+        )
     return g

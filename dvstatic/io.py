@@ -67,7 +67,7 @@ def read_mesh(path: str | Path) -> Mesh:
         raise ValueError(f"mesh file not found: {path}")
     try:
         m = meshio.read(path)
-    except Exception as exc:  # meshio raises many types for unreadable files
+    except (Exception, SystemExit) as exc:  # meshio raises many types, even SystemExit
         raise ValueError(f"cannot read mesh file {path}: {exc}") from None
     pts = np.asarray(m.points, dtype=float)
     if pts.shape[1] == 3:
@@ -108,6 +108,8 @@ def read_mesh(path: str | Path) -> Mesh:
 def nodal_field(solution, name: str, stress: str = "virial") -> np.ndarray:
     """A nodal scalar field of a solution by name (see :data:`FIELDS`); stress fields
     use the recovery ``stress`` ("virial" or "strain", see ``Solution.stress``)."""
+    if name not in FIELDS:
+        raise ValueError(f"unknown field {name!r}; accepted: {', '.join(FIELDS)}")
     u = solution.u
     if name == "|u|":
         return np.hypot(u[:, 0], u[:, 1])
@@ -223,6 +225,7 @@ def summary(solution, fe=None, probes=None, part_stress=()) -> dict:
                 "seconds",
                 "reused",
                 "n_dof",
+                "parallel",
             )
             if k in info
         },

@@ -19,7 +19,6 @@ from __future__ import annotations
 import logging
 
 import numpy as np
-from scipy.spatial import Delaunay, cKDTree
 
 from ._checks import check_int, check_positive, check_seed
 from .domain import Circle, Domain, Polygon, rectangle_domain
@@ -123,6 +122,8 @@ def generate(
     Mesh
         With a part per polygon edge name and per hole name.
     """
+    from scipy.spatial import cKDTree
+
     if not isinstance(domain, Domain):
         raise TypeError(f"domain must be a dvstatic Domain, got {type(domain).__name__}")
     h = check_positive("h", h)
@@ -268,8 +269,9 @@ def _interior_points(domain: Domain, h: float, kind: str, jitter: float, rng) ->
     return p
 
 
-def lloyd(domain: Domain, points: np.ndarray, h: float,
-          iterations: int = CVT_ITERATIONS) -> np.ndarray:
+def lloyd(
+    domain: Domain, points: np.ndarray, h: float, iterations: int = CVT_ITERATIONS
+) -> np.ndarray:
     """Lloyd relaxation: interior points move to the centroids of their Voronoi cells.
 
     Boundary points (on a domain curve) stay. Cells are clipped to the triangulated
@@ -305,11 +307,14 @@ def lloyd(domain: Domain, points: np.ndarray, h: float,
             mid = 0.5 * (x[:, o] + x[:, a])
             for v in (o, a):
                 xv = x[:, v]
-                sa = 0.5 * ((mid[:, 0] - xv[:, 0]) * (cc[:, 1] - xv[:, 1])
-                            - (mid[:, 1] - xv[:, 1]) * (cc[:, 0] - xv[:, 0]))
+                sa = 0.5 * (
+                    (mid[:, 0] - xv[:, 0]) * (cc[:, 1] - xv[:, 1])
+                    - (mid[:, 1] - xv[:, 1]) * (cc[:, 0] - xv[:, 0])
+                )
                 sa = np.abs(sa) * np.sign(
                     (cc[:, 0] - mid[:, 0]) * (x[:, k, 0] - mid[:, 0])
-                    + (cc[:, 1] - mid[:, 1]) * (x[:, k, 1] - mid[:, 1]))
+                    + (cc[:, 1] - mid[:, 1]) * (x[:, k, 1] - mid[:, 1])
+                )
                 c = (xv + mid + cc) / 3.0
                 area += np.bincount(tri[:, v], sa, n)
                 for d in range(2):
@@ -322,8 +327,9 @@ def lloyd(domain: Domain, points: np.ndarray, h: float,
     return p
 
 
-def with_spread(mesh: Mesh, sigma_l: float, seed: int | None = 0, rtol: float = 0.02,
-                max_evaluations: int = 24) -> Mesh:
+def with_spread(
+    mesh: Mesh, sigma_l: float, seed: int | None = 0, rtol: float = 0.02, max_evaluations: int = 24
+) -> Mesh:
     """Randomly moved copy of ``mesh`` whose sigma_L is about ``sigma_l`` (paper exp. 3).
 
     The perturbation amplitude of :meth:`Mesh.perturbed` is found by bisection.
@@ -351,8 +357,10 @@ def with_spread(mesh: Mesh, sigma_l: float, seed: int | None = 0, rtol: float = 
     sigma_l = check_positive("sigma_l", sigma_l)
     s0 = mesh.edge_length_spread()
     if sigma_l < s0 * (1 - rtol):
-        raise ValueError(f"target sigma_L = {sigma_l} is below the spread of the starting mesh "
-                         f"({s0:.4f}); start from a more regular mesh")
+        raise ValueError(
+            f"target sigma_L = {sigma_l} is below the spread of the starting mesh "
+            f"({s0:.4f}); start from a more regular mesh"
+        )
     if sigma_l <= s0 * (1 + rtol):
         return mesh
     h = mesh.h
@@ -539,6 +547,8 @@ def _periodic_delaunay(p: np.ndarray, period: np.ndarray) -> tuple[np.ndarray, n
     Points are copied across the box sides within a margin, triangulated, and the
     triangles whose centroid lies in the box are kept, each once.
     """
+    from scipy.spatial import Delaunay
+
     n = len(p)
     margin = min(1.0, 4.0 * np.sqrt(np.log(n + 2.0) / n))
     while True:

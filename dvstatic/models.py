@@ -21,16 +21,20 @@ import logging
 import time
 from dataclasses import dataclass
 from functools import cached_property
-from typing import ClassVar
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
-import scipy.sparse as sp
 
 from . import assembly, calibration
 from . import geometry as _geometry
 from ._checks import as_displacement, as_strain, check_choice, check_positive, check_real
+from .distributed import launched_under_mpi
 from .kinematics import A_OF, O_OF, edge_frames, half_sides
 from .mesh import Mesh
+
+if TYPE_CHECKING:  # annotations only: scipy is imported where it is used
+    import scipy.sparse as sp
+
 
 log = logging.getLogger(__name__)
 
@@ -44,6 +48,7 @@ MIN_WEIGHT = 0.05
 def voronoi_weights(geom) -> np.ndarray:
     """Bond weights ``sqrt(3) r / l`` (1 on the regular lattice), floored at 0.05."""
     return np.maximum(np.sqrt(3.0) * geom.r / geom.length, MIN_WEIGHT)
+
 
 CHUNK = 1 << 18  # triangles per assembly chunk (bounds temporary memory)
 
@@ -94,7 +99,10 @@ class VoronoiModel:
         check_choice("bonds", self.bonds, BONDS)
         object.__setattr__(self, "E", E)
         object.__setattr__(self, "nu", nu)
-        _ = self.micro  # calibrate now: an impossible nu fails at construction
+        if not launched_under_mpi():
+            _ = self.micro  # calibrate now: an impossible nu fails at construction
+        # under mpiexec the calibration waits: solver="petsc" computes it from sums
+        # over each rank's own bonds, so no rank needs the global geometry
 
     # ------------------------------------------------------------ parameters
     @cached_property
@@ -109,8 +117,9 @@ class VoronoiModel:
             return self.calibration
         if self.calibration == "relaxed":
             return calibration.relaxed(self.kind, self.mesh, self.E, self.nu, self.bonds)
-        return calibration.paper(self.kind, self.mesh, self.geometry, self.E, self.nu,
-                                 self.bond_weight)
+        return calibration.paper(
+            self.kind, self.mesh, self.geometry, self.E, self.nu, self.bond_weight
+        )
 
     @cached_property
     def bond_weight(self) -> np.ndarray:
@@ -247,6 +256,8 @@ class VoronoiModel:
         return ke
 
     def _assemble(self, u: np.ndarray | None, strain, tension) -> sp.bsr_matrix:
+        import scipy.sparse as sp
+
         pat = assembly.pattern(self.mesh)
         data = np.zeros((pat.nnzb, 4))
         for sl in _chunks(self.mesh.n_triangles):

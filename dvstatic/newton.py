@@ -18,14 +18,17 @@ from __future__ import annotations
 import logging
 import time
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from . import linalg
 from .models import VoronoiModel
 from .ordering import mesh_dof_order
+
+if TYPE_CHECKING:  # annotations only: scipy is imported where it is used
+    pass
+
 
 log = logging.getLogger(__name__)
 
@@ -116,6 +119,8 @@ class _Tangent:
         return x, {"solver": "amg-gmres", "iterations": its, "residual": res, "rebuilt": rebuilt}
 
     def _build(self, system) -> None:
+        import scipy.sparse as sp
+
         sym = (system.A + system.A.T) * 0.5
         self.amg = linalg.AMGSolver(
             sp.bsr_matrix(sym, blocksize=(2, 2)), linalg.rigid_modes(self.model.mesh.points)
@@ -123,6 +128,8 @@ class _Tangent:
         self.builds += 1
 
     def _gmres(self, A, b):
+        import scipy.sparse.linalg as spla
+
         count = [0]
 
         def cb(_):
@@ -254,7 +261,13 @@ def solve_nonlinear(
                     f"{dlam:.3g}, with line search={opts.line_search} and the "
                     f"{opts.solver} linear solver. The load may exceed what the structure can "
                     "carry, or more steps are needed",
-                    {"steps": steps_info, "failed_step": sinfo, "cutbacks": cutbacks - 1},
+                    {
+                        "steps": steps_info,
+                        "failed_step": sinfo,
+                        "cutbacks": cutbacks - 1,
+                        "u": u.copy(),
+                        "load_factor": lam,
+                    },
                 )
             dlam *= 0.5
             log.info(

@@ -10,11 +10,15 @@ the optimal O(N log N) fill order for 2-D meshes.
 from __future__ import annotations
 
 import weakref
+from typing import TYPE_CHECKING
 
 import numpy as np
-import scipy.sparse as sp
 
 from .mesh import Mesh
+
+if TYPE_CHECKING:  # annotations only: scipy is imported where it is used
+    pass
+
 
 __all__ = ["nested_dissection", "mesh_dof_order"]
 
@@ -38,6 +42,8 @@ def nested_dissection(points: np.ndarray, edges: np.ndarray, leaf: int = 128) ->
     ndarray of int, shape (N,)
         A permutation of ``range(N)``.
     """
+    import scipy.sparse as sp
+
     n = len(points)
     adj = sp.coo_matrix(
         (

@@ -62,8 +62,12 @@ SCHEMA: dict[str, F] = {
                 "string", "domain", required=True, choices=("rectangle", "polygon", "disc", "file")
             ),
             "h": F("number", "node spacing (length); required except for type = file"),
-            "kind": F("string", "interior points", default="jittered",
-                      choices=("lattice", "jittered", "random", "cvt")),
+            "kind": F(
+                "string",
+                "interior points",
+                default="jittered",
+                choices=("lattice", "jittered", "random", "cvt"),
+            ),
             "jitter": F("number", "relative jitter of kind = jittered, in [0, 0.5)", default=0.3),
             "seed": F("int", "random seed", default=0),
             "width": F(
@@ -102,13 +106,21 @@ SCHEMA: dict[str, F] = {
                 default="DV",
                 choices=("DV", "RV"),
             ),
-            "calibration": F("string", "micro-parameters: paper (closed form, affine strain) or "
-                             "relaxed (matches E and nu in equilibrium on a periodic sample "
-                             "with the mesh's bond-length spread)", default="paper",
-                             choices=("paper", "relaxed")),
-            "bonds": F("string", "normal-spring stiffness: uniform (the paper's k_n) or "
-                       "voronoi (k_n sqrt(3) r/l: no stiff surface layer)", default="uniform",
-                       choices=("uniform", "voronoi")),
+            "calibration": F(
+                "string",
+                "micro-parameters: paper (closed form, affine strain) or "
+                "relaxed (matches E and nu in equilibrium on a periodic sample "
+                "with the mesh's bond-length spread)",
+                default="paper",
+                choices=("paper", "relaxed"),
+            ),
+            "bonds": F(
+                "string",
+                "normal-spring stiffness: uniform (the paper's k_n) or "
+                "voronoi (k_n sqrt(3) r/l: no stiff surface layer)",
+                default="uniform",
+                choices=("uniform", "voronoi"),
+            ),
         },
     ),
     "supports": F(
@@ -146,7 +158,12 @@ SCHEMA: dict[str, F] = {
         "how to solve",
         default={},
         schema={
-            "type": F("string", "linear solver", default="auto", choices=("auto", "direct", "amg")),
+            "type": F(
+                "string",
+                "linear solver (petsc: distributed, run under mpiexec; docs/parallel.md)",
+                default="auto",
+                choices=("auto", "direct", "amg", "dynamic-relaxation", "petsc"),
+            ),
             "nonlinear": F(
                 "bool", "large displacements (Newton with load stepping)", default=False
             ),
@@ -156,6 +173,12 @@ SCHEMA: dict[str, F] = {
                 "number", "nonlinear: residual tolerance relative to the load", default=1e-8
             ),
             "max_iter": F("int", "nonlinear: Newton iterations per step", default=25),
+            "best_effort": F(
+                "bool",
+                "return (and write) the last state of an iteration that does "
+                "not converge, marked unconverged; the command exits with code 4",
+                default=False,
+            ),
             "allow_unstable": F(
                 "bool", "nonlinear: accept unstable converged states", default=False
             ),
@@ -485,8 +508,13 @@ class Scene:
         cls = DV if self.data["model"]["type"] == "DV" else RV
         mat = self.data["material"]
         try:
-            return cls(mesh, mat["E"], mat["nu"], calibration=self.data["model"]["calibration"],
-                       bonds=self.data["model"]["bonds"])
+            return cls(
+                mesh,
+                mat["E"],
+                mat["nu"],
+                calibration=self.data["model"]["calibration"],
+                bonds=self.data["model"]["bonds"],
+            )
         except ValueError as exc:
             raise self._err("material.nu" if "nu" in str(exc) else "material", exc) from None
 
@@ -543,6 +571,7 @@ class Scene:
             "newton_rtol": s["newton_rtol"],
             "max_iter": s["max_iter"],
             "allow_unstable": s["allow_unstable"],
+            "best_effort": s["best_effort"],
         }
 
 

@@ -12,15 +12,17 @@ from __future__ import annotations
 import logging
 import time
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-import scipy.linalg
-import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from . import calibration
 from .loads import constraints
 from .models import VoronoiModel
+
+if TYPE_CHECKING:  # annotations only: scipy is imported where it is used
+    pass
+
 
 log = logging.getLogger(__name__)
 
@@ -71,10 +73,12 @@ class StabilityReport:
     method: str
 
     def __str__(self) -> str:
-        return (f"admissible nu_m in ({self.nu_m_range[0]:.4g}, {self.nu_m_range[1]:.4g}), "
-                f"i.e. nu in ({self.nu_range[0]:.4g}, {self.nu_range[1]:.4g}); model nu_m = "
-                f"{self.nu_m:.4g}: {'stable' if self.stable else 'UNSTABLE'} "
-                f"(margin {self.margin:.3g})")
+        return (
+            f"admissible nu_m in ({self.nu_m_range[0]:.4g}, {self.nu_m_range[1]:.4g}), "
+            f"i.e. nu in ({self.nu_range[0]:.4g}, {self.nu_range[1]:.4g}); model nu_m = "
+            f"{self.nu_m:.4g}: {'stable' if self.stable else 'UNSTABLE'} "
+            f"(margin {self.margin:.3g})"
+        )
 
 
 def _parts(model: VoronoiModel):
@@ -112,8 +116,9 @@ def nu_of_nu_m(model: VoronoiModel, nu_m: float) -> float:
         den = nu_m * m.m1 + 3 * m.alpha
         return float((m.alpha + nu_m * m.m2) / den) if den != 0 else float("inf")
     if micro.calibration == "relaxed":
-        rev = calibration.rev_for_spread(micro.details["sigma_L_mesh"],
-                                         micro.details["sample_points"])
+        rev = calibration.rev_for_spread(
+            micro.details["sigma_L_mesh"], micro.details["sample_points"]
+        )
         r = calibration.relaxed_moduli(model.kind, rev, nu_m, model.bonds)
         # at the mesh's stability limit the sample may itself be unstable: no value
         return float(r["nu"]) if r["stable"] else float("nan")
@@ -140,6 +145,10 @@ def stability(model: VoronoiModel, supports=None) -> StabilityReport:
     runs (largest and smallest algebraic) with one sparse factorisation of ``K0``,
     plus one shift-invert run for the smallest eigenvalue of ``K``.
     """
+    import scipy.linalg
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as spla
+
     if not isinstance(model, VoronoiModel):
         raise TypeError(f"model must be a dvstatic DV or RV model, got {type(model).__name__}")
     t0 = time.perf_counter()
@@ -162,8 +171,7 @@ def stability(model: VoronoiModel, supports=None) -> StabilityReport:
         lam_max = float(spla.eigsh(A, which="LA", return_eigenvectors=False, **opts)[0])
         lam_min = float(spla.eigsh(A, which="SA", return_eigenvectors=False, **opts)[0])
         try:
-            min_eig = float(spla.eigsh(K, k=1, sigma=0.0, which="LM",
-                                       return_eigenvectors=False)[0])
+            min_eig = float(spla.eigsh(K, k=1, sigma=0.0, which="LM", return_eigenvectors=False)[0])
         except (RuntimeError, spla.ArpackNoConvergence):
             min_eig = float("nan")
         method = "arpack"
@@ -182,8 +190,17 @@ def stability(model: VoronoiModel, supports=None) -> StabilityReport:
     nu_hi = min(nu_hi, cal_hi) if np.isfinite(nu_hi) else float("nan")
     if np.isfinite(nu_lo) and np.isfinite(nu_hi) and nu_lo >= nu_hi:
         nu_lo = nu_hi = float("nan")  # no admissible nu maps back through the calibration
-    rep = StabilityReport(lam_min, lam_max, (float(lo), float(hi)),
-                          (float(nu_lo), float(nu_hi)), float(nu_m), stable, margin, min_eig,
-                          time.perf_counter() - t0, method)
+    rep = StabilityReport(
+        lam_min,
+        lam_max,
+        (float(lo), float(hi)),
+        (float(nu_lo), float(nu_hi)),
+        float(nu_m),
+        stable,
+        margin,
+        min_eig,
+        time.perf_counter() - t0,
+        method,
+    )
     log.info("stability: %s", rep)
     return rep

@@ -197,8 +197,171 @@ CASES = [
 ]
 
 
+def _cli(args):
+    from dvstatic import cli
+
+    code = cli.main(args)
+    if code != 0:
+        raise SystemExit(code)
+
+
+def _garbage_msh(tmp):
+    p = tmp / "bad.msh"
+    p.write_text("$MeshFormat\nthis is not gmsh\n")
+    return p
+
+
+CLI_CASES = [
+    (
+        "scene file missing",
+        lambda tmp: dv.scene.load(tmp / "none.toml"),
+        ValueError,
+        "scene file not found",
+    ),
+    (
+        "unreadable mesh file",
+        lambda tmp: dv.io.read_mesh(_garbage_msh(tmp)),
+        ValueError,
+        "cannot read mesh file",
+    ),
+    (
+        "bad --set syntax",
+        lambda tmp: dv.scene.load(_scene(tmp), ["mesh.h"]),
+        ValueError,
+        "key.path=value",
+    ),
+    (
+        "--set unknown key",
+        lambda tmp: dv.scene.load(_scene(tmp), ["mesh.size=2"]),
+        ValueError,
+        "mesh.size: unknown key",
+    ),
+    (
+        "--set wrong type",
+        lambda tmp: dv.scene.load(_scene(tmp), ['mesh.h="fine"']),
+        ValueError,
+        "mesh.h: expected a finite number",
+    ),
+    (
+        "cli run missing scene",
+        lambda tmp: _cli(["run", str(tmp / "none.toml"), "--quiet"]),
+        SystemExit,
+        "2",
+    ),
+    (
+        "cli validate without scripts",
+        lambda tmp: _cli(["validate", "--dir", str(tmp)]),
+        SystemExit,
+        "2",
+    ),
+    (
+        "unknown png field",
+        lambda tmp: dv.io.nodal_field(None, "temperature"),
+        ValueError,
+        "accepted: |u|",
+    ),
+    (
+        "unknown stress method",
+        lambda tmp: dv.solve(
+            dv.RV(_lattice(), 1e5, 0.2), dv.Fix("left"), dv.Traction("right", (1, 0))
+        ).stress("average"),
+        ValueError,
+        "accepted: virial, strain",
+    ),
+    (
+        "FE order 3",
+        lambda tmp: dv.fem.solve(_lattice(), 1e5, 0.2, dv.Fix("left"), [], order=3),
+        ValueError,
+        "order must be <= 2",
+    ),
+    (
+        "with_spread below start",
+        lambda tmp: dv.mesh.with_spread(dv.mesh.rectangle(1, 1, 0.1, kind="random", seed=1), 0.05),
+        ValueError,
+        "below the spread",
+    ),
+    (
+        "stability wrong model",
+        lambda tmp: dv.stability("DV", None),
+        TypeError,
+        "dvstatic DV or RV model",
+    ),
+    (
+        "relaxed nu unreachable",
+        lambda tmp: dv.DV(
+            dv.mesh.rectangle(1, 1, 0.1, kind="random", seed=0), 1e5, 0.2, calibration="relaxed"
+        ),
+        ValueError,
+        "no relaxed DV calibration",
+    ),
+]
+
+
+def _scene(tmp):
+    p = tmp / "s.toml"
+    p.write_text(
+        '[mesh]\ntype = "rectangle"\nwidth = 1.0\nheight = 1.0\nh = 0.25\n'
+        '[material]\nE = 1e5\nnu = 0.2\n[[supports]]\nwhere = "left"\n'
+    )
+    return p
+
+
+@pytest.mark.parametrize("case", CLI_CASES, ids=[c[0] for c in CLI_CASES])
+def test_bad_input_files_and_cli(tmp_path, capsys, case):
+    _, fn, exc, pattern = case
+    with pytest.raises(exc, match=pattern):
+        fn(tmp_path)
+    if exc is SystemExit:
+        err = capsys.readouterr().err
+        assert err.startswith("error: ") and "Traceback" not in err
+
+
 @pytest.mark.parametrize("case", CASES, ids=[c[0] for c in CASES])
 def test_bad_input(case):
     _, fn, exc, pattern = case
     with pytest.raises(exc, match=pattern):
         fn()
+
+
+def test_catalogue_is_documented():
+    from pathlib import Path
+
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "errors.md").read_text()
+    for name, *_ in CASES + CLI_CASES:
+        assert f"| {name} |" in doc, name
+
+
+def _write_doc() -> None:  # python tests/test_bad_input.py regenerates docs/errors.md
+    import tempfile
+    from pathlib import Path
+
+    rows = []
+    with tempfile.TemporaryDirectory() as d:
+        tmp = Path(d)
+        for name, fn, exc, _ in CASES + CLI_CASES:
+            try:
+                fn(tmp) if (name, fn, exc, _) in CLI_CASES else fn()
+                msg = "(no error)"
+            except BaseException as err:  # noqa: BLE001 - recording what is raised
+                msg = str(err).replace("|", "\\|").replace("\n", " ")
+                if isinstance(err, SystemExit):
+                    msg = f"exit code {err.code}; stderr: one line starting with `error:`"
+            rows.append(f"| {name} | `{exc.__name__}` | {msg} |")
+    text = (
+        "# Errors\n\n"
+        "Every bad input is refused at the public boundary with a `ValueError` or `TypeError`\n"
+        "(or `dvstatic.SolverError` for a solve that is refused or fails) whose message names\n"
+        "the problem and, where there is one, the accepted range. The command line prints\n"
+        "the message as one line starting with `error:` (no traceback) and exits with code 2\n"
+        "(bad input), 3 (solver refused or failed), 4 (best effort: unconverged result\n"
+        "written) or 130 (interrupted). Scene-file errors are listed in\n"
+        "[scenes.md](scenes.md) and tested in `tests/test_scene.py`.\n\n"
+        "This catalogue is generated by running every case of `tests/test_bad_input.py`\n"
+        "(`python tests/test_bad_input.py`), which also checks each type and message.\n\n"
+        "| case | exception | message |\n|---|---|---|\n" + "\n".join(rows) + "\n"
+    )
+    (Path(__file__).resolve().parents[1] / "docs" / "errors.md").write_text(text)
+
+
+if __name__ == "__main__":
+    _write_doc()

@@ -90,8 +90,9 @@ def test_surface_correction_slender_cantilever(cls):
     timoshenko = P * L**3 / (3 * E_BEAM * inertia) + P * L / (5 / 6 * G * H)
     tip = {}
     for bonds in ("uniform", "voronoi"):
-        sol = dv.solve(cls(m, E_BEAM, NU, bonds=bonds), dv.Fix("left"),
-                       dv.Traction("right", (0.0, -P / H)))
+        sol = dv.solve(
+            cls(m, E_BEAM, NU, bonds=bonds), dv.Fix("left"), dv.Traction("right", (0.0, -P / H))
+        )
         tip[bonds] = -sol.u[m.part_nodes("right"), 1].mean()
     assert abs(tip["voronoi"] / timoshenko - 1) <= 0.03
     assert tip["uniform"] / timoshenko - 1 < -0.10  # the paper's uniform k_n: too stiff
@@ -114,8 +115,10 @@ def test_cvt_meshes():
         assert cvt.edge_length_spread() < 0.8 * jit.edge_length_spread()
         for m in (jit, cvt):
             assert np.all(np.isin(m.part_nodes("left"), np.flatnonzero(m.points[:, 0] == 0)))
-        errs = [rel_l2(dv.solve(dv.RV(m, E_BEAM, NU), sup, ld).u, uniaxial_exact(m.points))
-                for m in (jit, cvt)]
+        errs = [
+            rel_l2(dv.solve(dv.RV(m, E_BEAM, NU), sup, ld).u, uniaxial_exact(m.points))
+            for m in (jit, cvt)
+        ]
         assert errs[1] < 0.5 * errs[0]
 
 

@@ -118,12 +118,39 @@ def test_run_refuses_to_overwrite(tmp_path):
 
 def test_validate_command(tmp_path):
     root = Path(__file__).resolve().parents[1]
-    proc = subprocess.run([sys.executable, "-m", "dvstatic", "validate", "--quick", "--only",
-                           "fig07", "--dir", str(root / "validation"), "--out", str(tmp_path)],
-                          capture_output=True, text=True, check=False)
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "dvstatic",
+            "validate",
+            "--quick",
+            "--only",
+            "fig07",
+            "--dir",
+            str(root / "validation"),
+            "--out",
+            str(tmp_path),
+        ],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
     assert proc.returncode == 0, proc.stderr
     assert (tmp_path / "fig07.png").is_file()
-    proc = subprocess.run([sys.executable, "-m", "dvstatic", "validate", "--only", "fig99",
-                           "--dir", str(root / "validation")], capture_output=True, text=True,
-                          check=False)
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "dvstatic",
+            "validate",
+            "--only",
+            "fig99",
+            "--dir",
+            str(root / "validation"),
+        ],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
     assert proc.returncode == 2 and "unknown script" in proc.stderr

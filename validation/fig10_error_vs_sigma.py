@@ -37,8 +37,11 @@ def _errors(mesh, models, calibration, rev_points, sup, ld) -> dict:
     for kind in models:
         cls = dv.DV if kind == "DV" else dv.RV
         try:
-            micro = (cal.relaxed(kind, mesh, E_BEAM, NU_BEAM, rev_points=rev_points)
-                     if calibration == "relaxed" else "paper")
+            micro = (
+                cal.relaxed(kind, mesh, E_BEAM, NU_BEAM, rev_points=rev_points)
+                if calibration == "relaxed"
+                else "paper"
+            )
             sol = dv.solve(cls(mesh, E_BEAM, NU_BEAM, calibration=micro), sup, ld)
             out[kind] = rel_l2(sol.u, exact)
         except (dv.SolverError, ValueError):
@@ -46,8 +49,14 @@ def _errors(mesh, models, calibration, rev_points, sup, ld) -> dict:
     return out
 
 
-def run(h: float, seeds: int, amplitudes=AMPLITUDES, models=("DV", "RV"),
-        calibration: str = "paper", rev_points: int = 20000) -> dict:
+def run(
+    h: float,
+    seeds: int,
+    amplitudes=AMPLITUDES,
+    models=("DV", "RV"),
+    calibration: str = "paper",
+    rev_points: int = 20000,
+) -> dict:
     import dvstatic as dv
 
     base = dv.mesh.rectangle(1.0, 1.0, h, kind="lattice")
@@ -56,8 +65,12 @@ def run(h: float, seeds: int, amplitudes=AMPLITUDES, models=("DV", "RV"),
     for amp in amplitudes:
         for seed in range(seeds if amp > 0 else 1):
             mesh = base.perturbed(amp * h, seed=seed) if amp > 0 else base
-            rec = {"amplitude": amp, "seed": seed, "sigma_L": mesh.edge_length_spread(),
-                   "nodes": mesh.n_points}
+            rec = {
+                "amplitude": amp,
+                "seed": seed,
+                "sigma_L": mesh.edge_length_spread(),
+                "nodes": mesh.n_points,
+            }
             rec.update(_errors(mesh, models, calibration, rev_points, sup, ld))
             rows.append(rec)
     cvt = []
@@ -69,8 +82,11 @@ def run(h: float, seeds: int, amplitudes=AMPLITUDES, models=("DV", "RV"),
     summary = []
     for amp in amplitudes:
         sel = [r for r in rows if r["amplitude"] == amp]
-        s = {"amplitude": amp, "sigma_L_mean": float(np.mean([r["sigma_L"] for r in sel])),
-             "n": len(sel)}
+        s = {
+            "amplitude": amp,
+            "sigma_L_mean": float(np.mean([r["sigma_L"] for r in sel])),
+            "n": len(sel),
+        }
         for kind in models:
             vals = [r[kind] for r in sel if r[kind] is not None]
             s[f"{kind}_mean"] = float(np.mean(vals)) if vals else None
@@ -79,8 +95,14 @@ def run(h: float, seeds: int, amplitudes=AMPLITUDES, models=("DV", "RV"),
             s[f"{kind}_max"] = float(np.max(vals)) if vals else None
             s[f"{kind}_unstable"] = sum(r[kind] is None for r in sel)
         summary.append(s)
-    return {"h": h, "seeds": seeds, "calibration": calibration, "rows": rows,
-            "summary": summary, "cvt": cvt}
+    return {
+        "h": h,
+        "seeds": seeds,
+        "calibration": calibration,
+        "rows": rows,
+        "summary": summary,
+        "cvt": cvt,
+    }
 
 
 def plot(data: dict, path) -> None:
@@ -97,10 +119,14 @@ def plot(data: dict, path) -> None:
                 ax.plot(x, 100 * y, style, ms=3, alpha=0.35)
                 top = max(top, 100 * y.max())
             summ = [s for s in run_["summary"] if s[f"{kind}_mean"] is not None]
-            ax.errorbar([s["sigma_L_mean"] for s in summ],
-                        [100 * s[f"{kind}_mean"] for s in summ],
-                        yerr=[100 * s[f"{kind}_std"] for s in summ], fmt=style + "-",
-                        capsize=3, label=f"{kind} perturbed lattice (mean, std)")
+            ax.errorbar(
+                [s["sigma_L_mean"] for s in summ],
+                [100 * s[f"{kind}_mean"] for s in summ],
+                yerr=[100 * s[f"{kind}_std"] for s in summ],
+                fmt=style + "-",
+                capsize=3,
+                label=f"{kind} perturbed lattice (mean, std)",
+            )
             cv = [(r["sigma_L"], r[kind]) for r in run_["cvt"] if r[kind] is not None]
             if cv:
                 x, y = np.array(cv).T
@@ -125,8 +151,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--h", type=float, default=0.02)
     p.add_argument("--seeds", type=int, default=5)
     p.add_argument("--rev", type=int, default=20000, help="points of the relaxed sample")
-    p.add_argument("--calibrations", nargs="+", default=["paper", "relaxed"],
-                   choices=["paper", "relaxed"])
+    p.add_argument(
+        "--calibrations", nargs="+", default=["paper", "relaxed"], choices=["paper", "relaxed"]
+    )
     a = p.parse_args(argv)
     h, seeds = (0.05, 3) if a.quick else (a.h, a.seeds)
     amps = (0.0, 0.1, 0.2, 0.3, 0.4) if a.quick else AMPLITUDES
@@ -135,14 +162,20 @@ def main(argv: list[str] | None = None) -> int:
     for cal in a.calibrations:
         run_ = run(h, seeds, amps, calibration=cal, rev_points=rev)
         data["runs"][cal] = run_
-        print(f"fig10: uniaxial error against sigma_L (h = {h}, {seeds} seeds, {cal} "
-              "calibration; failed = unstable or not calibrated)")
-        print(f"{'amp/h':>6} {'sigma_L':>8} {'DV mean':>9} {'DV std':>8} {'DV fail':>7} "
-              f"{'RV mean':>9} {'RV std':>8} {'RV fail':>7}")
+        print(
+            f"fig10: uniaxial error against sigma_L (h = {h}, {seeds} seeds, {cal} "
+            "calibration; failed = unstable or not calibrated)"
+        )
+        print(
+            f"{'amp/h':>6} {'sigma_L':>8} {'DV mean':>9} {'DV std':>8} {'DV fail':>7} "
+            f"{'RV mean':>9} {'RV std':>8} {'RV fail':>7}"
+        )
         for s in run_["summary"]:
-            print(f"{s['amplitude']:6.2f} {s['sigma_L_mean']:8.4f} {_fmt(s['DV_mean'])} "
-                  f"{_fmt(s['DV_std'])[1:]} {s['DV_unstable']:>4}/{s['n']:<2} "
-                  f"{_fmt(s['RV_mean'])} {_fmt(s['RV_std'])[1:]} {s['RV_unstable']:>4}/{s['n']:<2}")
+            print(
+                f"{s['amplitude']:6.2f} {s['sigma_L_mean']:8.4f} {_fmt(s['DV_mean'])} "
+                f"{_fmt(s['DV_std'])[1:]} {s['DV_unstable']:>4}/{s['n']:<2} "
+                f"{_fmt(s['RV_mean'])} {_fmt(s['RV_std'])[1:]} {s['RV_unstable']:>4}/{s['n']:<2}"
+            )
         for r in run_["cvt"]:
             print(f"{'cvt':>6} {r['sigma_L']:8.4f} {_fmt(r['DV'])} {'':>16} {_fmt(r['RV'])}")
     # the paper-calibration results also at the top level (summary, rows, cvt)

@@ -47,33 +47,53 @@ def run(h: float, nus, meshes, rev_points: int) -> dict:
         for kind, cls in (("DV", dv.DV), ("RV", dv.RV)):
             for cal in ("paper", "relaxed"):
                 for nu in nus:
-                    rec = {"mesh": mname, "sigma_L": mesh.edge_length_spread(), "model": kind,
-                           "calibration": cal, "nu": nu, "nodes": mesh.n_points}
+                    rec = {
+                        "mesh": mname,
+                        "sigma_L": mesh.edge_length_spread(),
+                        "model": kind,
+                        "calibration": cal,
+                        "nu": nu,
+                        "nodes": mesh.n_points,
+                    }
                     try:
                         if cal == "paper":
                             model = cls(mesh, E_BEAM, nu)
                         else:
-                            micro = calibration.relaxed(kind, mesh, E_BEAM, nu,
-                                                        rev_points=rev_points)
+                            micro = calibration.relaxed(
+                                kind, mesh, E_BEAM, nu, rev_points=rev_points
+                            )
                             model = cls(mesh, E_BEAM, nu, calibration=micro)
                     except ValueError as exc:
                         rec.update(status="no calibration", reason=str(exc))
                         cases.append(rec)
                         continue
                     rep = dv.stability(model, sup)
-                    rec.update(nu_m=model.nu_m, nu_range=rep.nu_range, nu_m_range=rep.nu_m_range,
-                               margin=rep.margin, stability_seconds=rep.seconds)
+                    rec.update(
+                        nu_m=model.nu_m,
+                        nu_range=rep.nu_range,
+                        nu_m_range=rep.nu_m_range,
+                        margin=rep.margin,
+                        stability_seconds=rep.seconds,
+                    )
                     if not rep.stable:
                         rec["status"] = "unstable"
                     else:
                         sol = dv.solve(model, sup, ld, solver="direct")
                         exact = np.c_[-mesh.points[:, 0] / E_BEAM, nu * mesh.points[:, 1] / E_BEAM]
-                        rec.update(status="solved", error=rel_l2(sol.u, exact),
-                                   residual=sol.info["residual"])
+                        rec.update(
+                            status="solved",
+                            error=rel_l2(sol.u, exact),
+                            residual=sol.info["residual"],
+                        )
                         assert sol.info["residual"] <= 1e-10
                     cases.append(rec)
-    return {"h": h, "nus": list(nus), "meshes": list(meshes), "rev_points": rev_points,
-            "cases": cases}
+    return {
+        "h": h,
+        "nus": list(nus),
+        "meshes": list(meshes),
+        "rev_points": rev_points,
+        "cases": cases,
+    }
 
 
 def plot(data: dict, path) -> None:
@@ -99,8 +119,15 @@ def plot(data: dict, path) -> None:
                     txt = f"{100 * c['error']:.1f}"
                 else:
                     txt = "U" if c["status"] == "unstable" else "-"
-                ax.text(q, r, txt, ha="center", va="center", fontsize=7,
-                        color="w" if c["status"] == "solved" else "r")
+                ax.text(
+                    q,
+                    r,
+                    txt,
+                    ha="center",
+                    va="center",
+                    fontsize=7,
+                    color="w" if c["status"] == "solved" else "r",
+                )
             ax.set_xticks(range(len(nus)), [f"{v:g}" for v in nus])
             ax.set_yticks(range(len(meshes)), meshes)
             ax.set_xlabel("nu")

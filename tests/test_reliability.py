@@ -1,0 +1,145 @@
+"""No silent wrong answers, no lost output."""
+
+import json
+import textwrap
+
+import numpy as np
+import pytest
+
+import dvstatic as dv
+from conftest import E_BEAM, NU, uniaxial_problem
+from dvstatic import cli
+
+SCENE = """
+[mesh]
+type = "rectangle"
+width = 1.0
+height = 1.0
+h = 0.2
+kind = "lattice"
+
+[material]
+E = 1e5
+nu = 0.2
+
+[[supports]]
+where = "left"
+
+[[loads]]
+type = "traction"
+where = "right"
+value = [0.0, -1.0]
+
+[output]
+png = false
+"""
+
+
+def test_best_effort_marks_unconverged_results():
+    m = dv.mesh.rectangle(1.0, 1.0, 0.05, kind="lattice")
+    model = dv.RV(m, E_BEAM, NU)
+    sup, ld = uniaxial_problem()
+    with pytest.raises(dv.SolverError, match="after 2 iteration"):
+        dv.solve(model, sup, ld, solver="amg", maxiter=2)
+    sol = dv.solve(model, sup, ld, solver="amg", maxiter=2, best_effort=True)
+    assert sol.info["converged"] is False and "failure" in sol.info
+    assert np.all(np.isfinite(sol.u))
+    nl = dv.solve(
+        model,
+        sup,
+        dv.Traction("right", (-5e5, 0.0)),
+        nonlinear=True,
+        steps=2,
+        max_cutbacks=1,
+        best_effort=True,
+    )
+    assert nl.info["converged"] is False and nl.info["load_factor"] < 1.0
+    dr = dv.solve(model, sup, ld, solver="dynamic-relaxation", maxiter=30, best_effort=True)
+    assert dr.info["converged"] is False
+
+
+def test_best_effort_never_hides_a_refusal():
+    m = dv.mesh.rectangle(1.0, 1.0, 0.1, kind="random", seed=0)
+    sup, ld = uniaxial_problem()
+    with pytest.raises(dv.SolverError, match="not positive definite"):
+        dv.solve(dv.DV(m, E_BEAM, 0.2), sup, ld, best_effort=True)
+
+
+def test_cli_best_effort_exits_nonzero(tmp_path, capsys):
+    scene = tmp_path / "s.toml"
+    scene.write_text(
+        textwrap.dedent(SCENE)
+        .replace(
+            "[output]",
+            "[solver]\nnonlinear = true\nsteps = 1\nmax_iter = 1\nbest_effort = true\n\n[output]",
+        )
+        .replace("value = [0.0, -1.0]", "value = [0.0, -5e4]")
+    )
+    code = cli.main(["run", str(scene), "--out", str(tmp_path / "o"), "--quiet"])
+    assert code == 4
+    assert "did NOT converge" in capsys.readouterr().err
+    d = json.loads((tmp_path / "o" / "s.json").read_text())
+    assert d["solver"]["converged"] is False
+
+
+def test_interrupted_run_leaves_earlier_results(tmp_path, capsys, monkeypatch):
+    scene = tmp_path / "s.toml"
+    scene.write_text(textwrap.dedent(SCENE))
+    out = tmp_path / "o"
+    out.mkdir()
+    (out / "earlier.txt").write_text("keep me")
+    from dvstatic import io
+
+    def boom(*a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(io, "write_json", boom)
+    code = cli.main(["run", str(scene), "--out", str(out), "--quiet", "--overwrite"])
+    assert code == 130
+    assert (out / "earlier.txt").read_text() == "keep me"
+    assert sorted(p.name for p in out.iterdir()) == ["earlier.txt"]
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".o.")]  # no staging left
+    assert "nothing was written" in capsys.readouterr().err
+    monkeypatch.undo()
+    assert cli.main(["run", str(scene), "--out", str(out), "--quiet", "--overwrite"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["s.json", "s.vtu"]
+
+
+def test_every_solution_is_checked():
+    m = dv.mesh.rectangle(1.0, 1.0, 0.1, kind="jittered", seed=3)
+    sup, ld = uniaxial_problem()
+    for solver in ("direct", "amg", "dynamic-relaxation"):
+        sol = dv.solve(dv.RV(m, E_BEAM, NU), sup, ld, solver=solver, rtol=1e-9)
+        assert sol.info["converged"] and np.all(np.isfinite(sol.u))
+        K = sol.model.stiffness()
+        from dvstatic.loads import constraints, load_vector
+
+        dofs, _ = constraints(m, sup)
+        r = K @ sol.u.reshape(-1) - load_vector(m, ld)
+        r[dofs] = 0.0
+        assert np.linalg.norm(r) <= 1e-6 * np.linalg.norm(load_vector(m, ld))
+
+
+def _sliver_mesh(bump):
+    base = dv.mesh.rectangle(1.0, 1.0, 0.1, kind="lattice")
+    p, t = base.points, base.triangles
+    top = base.part_edges("top")
+    a, b = top[len(top) // 2]
+    pts = np.vstack([p, 0.5 * (p[a] + p[b]) + [0.0, bump]])
+    tri = np.vstack([t, [a, b, len(p)]])
+    return dv.Mesh(pts, tri, parts={k: base.part_edges(k) for k in ("left", "bottom", "right")})
+
+
+def test_sliver_solves_at_the_rounding_floor():
+    """A boundary sliver whose circumcentre is 1e11 bond lengths away: the residual
+    relative to the load cannot reach 1e-8 (internal forces cancel at ~R/l times the
+    load), but the backward error is at machine level and the answer is the same as
+    with a mild sliver. Before the backward-error criterion this was refused."""
+    sup = [dv.Fix("left", x=0.0), dv.Fix("bottom", y=0.0)]
+    ld = [dv.Traction("right", (-1.0, 0.0))]
+    mild = dv.solve(dv.RV(_sliver_mesh(1e-6), 1e5, 0.2), sup, ld, solver="direct")
+    hard = dv.solve(dv.RV(_sliver_mesh(1e-12), 1e5, 0.2), sup, ld, solver="direct")
+    assert hard.info["residual"] > 1e-8  # the plain criterion would refuse it
+    assert hard.info["backward_error"] < 1e-15
+    # every node but the apex (whose motion depends on the sliver's shape)
+    assert np.max(np.abs(hard.u[:-1] - mild.u[:-1])) < 1e-6 * np.max(np.abs(mild.u))
