@@ -36,7 +36,8 @@ class Solution:
     ----------
     model : DV or RV
     u : ndarray, shape (N, 2)
-        Nodal displacements (length units).
+        Nodal displacements (length units). ``None`` on MPI ranks other than 0 with
+        ``solver="petsc"`` (rank 0 gathers the solution; so are ``reactions``).
     reactions : ndarray, shape (N, 2)
         Support reactions (force per unit thickness), non-zero at constrained dofs:
         the force the supports exert on the body.

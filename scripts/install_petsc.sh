@@ -28,10 +28,14 @@ if ! ldconfig -p 2>/dev/null | grep -q "liblapack.so "; then
 fi
 
 "$PY" -m pip install -q mpich mpi4py
+# --no-cache-dir: what PETSc's build finds (MPI on PATH, BLAS) is not part of pip's wheel
+# cache key, so a wheel cached from another environment (e.g. without MPI) must not be reused
 PETSC_CONFIGURE_OPTIONS="--with-cuda=0 --with-hip=0 --with-x=0 COPTFLAGS=-O2 CXXOPTFLAGS=-O2 ${PETSC_CONFIGURE_OPTIONS:-}" \
-  "$PY" -m pip install -q petsc
+  "$PY" -m pip install -q --no-cache-dir petsc
 # petsc4py builds against the PETSc just installed (otherwise pip would build PETSc again)
 PETSC_DIR=$("$PY" -c "import petsc; print(petsc.get_petsc_dir())") \
-  "$PY" -m pip install -q petsc4py
+  "$PY" -m pip install -q --no-cache-dir petsc4py
 "$PY" -m pip install -q ".[petsc,test]"
-"$PY" -c "from petsc4py import PETSc; print('PETSc', '.'.join(map(str, PETSc.Sys.getVersion())), 'ready')"
+# smoke test: two ranks see each other (fails on a PETSc built without MPI)
+"$VENV/bin/mpiexec" -n 2 "$PY" -c "from petsc4py import PETSc; assert PETSc.COMM_WORLD.getSize() == 2"
+"$PY" -c "from petsc4py import PETSc; print('PETSc', '.'.join(map(str, PETSc.Sys.getVersion())), 'with MPI: ready')"

@@ -119,6 +119,11 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     p = parser(__doc__)
     a = p.parse_args(argv)
+    from dvstatic import distributed
+
+    if not distributed.available():
+        print("bench_mpi skipped: petsc4py is not installed (scripts/install_petsc.sh)")
+        return 0
     sizes = (1e4, 3e4) if a.quick else (1e4, 1e5, 1e6)
     per_rank = 1.5e4 if a.quick else 5e5
     results: dict = {"benchmark": "bench_mpi", "strong": [], "weak": [], "sizes": []}
