@@ -39,6 +39,7 @@ _LAZY_SUBMODULES = frozenset(
         "models",
         "newton",
         "ordering",
+        "periodic",
         "petsc_solve",
         "plot",
         "post",

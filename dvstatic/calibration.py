@@ -219,7 +219,7 @@ def rev_for_spread(sigma_l: float, n_points: int = REV_POINTS, seed: int = 0) ->
     raise sigma_L), the amplitude found by bisection; a random periodic point set when
     the spread exceeds what moves can reach.
     """
-    from .meshgen import periodic_square
+    from .periodic import periodic_square
 
     key = (round(sigma_l, 4), n_points, seed)
     if key in _REV_CACHE:

@@ -328,7 +328,8 @@ class Mesh:
         -------
         Mesh
         """
-        from .meshgen import _disc, _move_in_domain, _periodic_delaunay
+        from .meshgen import _disc, _move_in_domain
+        from .periodic import periodic_delaunay
 
         amplitude = check_positive("amplitude", amplitude, allow_zero=True)
         rng = np.random.default_rng(check_seed(seed))
@@ -338,7 +339,7 @@ class Mesh:
         if self.is_periodic:
             p = np.mod(p + _disc(rng, len(p)) * amplitude, self.period)
             p[p >= self.period] = 0.0
-            tri, images = _periodic_delaunay(p, self.period)
+            tri, images = periodic_delaunay(p, self.period)
             return Mesh(p, tri, period=self.period, images=images)
         if self.domain is None:
             bnd = self.boundary_nodes
@@ -476,8 +477,8 @@ from .meshgen import (  # noqa: E402
     disc,
     generate,
     lloyd,
-    periodic_square,
     polygon,
     rectangle,
     with_spread,
 )
+from .periodic import periodic_square  # noqa: E402

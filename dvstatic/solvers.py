@@ -188,28 +188,21 @@ def solve(
         converge, or a load step could not be completed after cut-backs; the error
         says which and carries what was tried in ``.info``.
     """
+    options = dict(locals())
     if solver == "petsc" and best_effort:
         raise ValueError("best_effort is not available with solver='petsc'")
-    kwargs = dict(
-        solver=solver,
-        rtol=rtol,
-        maxiter=maxiter,
-        nonlinear=nonlinear,
-        steps=steps,
-        newton_rtol=newton_rtol,
-        max_iter=max_iter,
-        max_cutbacks=max_cutbacks,
-        line_search=line_search,
-        allow_unstable=allow_unstable,
-        progress=progress,
-        check_stability=check_stability,
-    )
+    # every keyword option, passed on as given (the signature above is the one place
+    # they are listed with defaults)
+    kwargs = {k: v for k, v in options.items() if k not in _POSITIONAL + ("best_effort",)}
     try:
         return _solve(model, supports, loads, **kwargs)
     except linalg.SolverError as exc:
         if not best_effort or "u" not in exc.info:
             raise
         return _unconverged(model, supports, loads, exc, nonlinear)
+
+
+_POSITIONAL = ("model", "supports", "loads")
 
 
 def _listify(items) -> list:
@@ -242,22 +235,23 @@ def _unconverged(model, supports, loads, exc, nonlinear) -> Solution:
 
 def _solve(
     model: VoronoiModel,
-    supports=None,
-    loads=None,
+    supports,
+    loads,
     *,
-    solver: str = "auto",
-    rtol: float = 1e-10,
-    maxiter: int | None = None,
-    nonlinear: bool = False,
-    steps: int = 10,
-    newton_rtol: float = 1e-8,
-    max_iter: int = 25,
-    max_cutbacks: int = 8,
-    line_search: bool = True,
-    allow_unstable: bool = False,
-    progress: bool = False,
-    check_stability: bool = True,
+    solver,
+    rtol,
+    maxiter,
+    nonlinear,
+    steps,
+    newton_rtol,
+    max_iter,
+    max_cutbacks,
+    line_search,
+    allow_unstable,
+    progress,
+    check_stability,
 ) -> Solution:
+    """The body of :func:`solve` (options as documented there, defaults set there)."""
     if not isinstance(model, VoronoiModel):
         raise TypeError(f"model must be a dvstatic DV or RV model, got {type(model).__name__}")
     check_choice("solver", solver, linalg.SOLVERS)
