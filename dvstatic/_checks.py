@@ -6,6 +6,8 @@ import numbers
 
 import numpy as np
 
+from .errors import InputError
+
 
 def check_real(name: str, value) -> float:
     """A finite real number (bool is refused)."""
@@ -13,7 +15,7 @@ def check_real(name: str, value) -> float:
         raise TypeError(f"{name} must be a real number, got {type(value).__name__} {value!r}")
     v = float(value)
     if not np.isfinite(v):
-        raise ValueError(f"{name} must be finite, got {value!r}")
+        raise InputError(f"{name} must be finite, got {value!r}", name)
     return v
 
 
@@ -22,7 +24,7 @@ def check_positive(name: str, value, allow_zero: bool = False) -> float:
     v = check_real(name, value)
     if v < 0 or (v == 0 and not allow_zero):
         bound = ">= 0" if allow_zero else "> 0"
-        raise ValueError(f"{name} must be {bound}, got {value!r}")
+        raise InputError(f"{name} must be {bound}, got {value!r}", name)
     return v
 
 
@@ -32,9 +34,9 @@ def check_int(name: str, value, minimum: int | None = None, maximum: int | None 
         raise TypeError(f"{name} must be an integer, got {type(value).__name__} {value!r}")
     v = int(value)
     if minimum is not None and v < minimum:
-        raise ValueError(f"{name} must be >= {minimum}, got {v}")
+        raise InputError(f"{name} must be >= {minimum}, got {v}", name)
     if maximum is not None and v > maximum:
-        raise ValueError(f"{name} must be <= {maximum}, got {v}")
+        raise InputError(f"{name} must be <= {maximum}, got {v}", name)
     return v
 
 
@@ -45,12 +47,14 @@ def check_seed(seed) -> int | None:
     return check_int("seed", seed, minimum=0)
 
 
-def check_choice(name: str, value, choices) -> str:
-    """One of a fixed set of strings."""
+def check_choice(name: str, value, choices, param: str | None = None) -> str:
+    """One of a fixed set of strings (``param``: the argument name, default ``name``)."""
     if not isinstance(value, str):
         raise TypeError(f"{name} must be a string, one of {tuple(choices)}, got {value!r}")
     if value not in choices:
-        raise ValueError(f"unknown {name} {value!r}; accepted: {', '.join(map(str, choices))}")
+        raise InputError(
+            f"unknown {name} {value!r}; accepted: {', '.join(map(str, choices))}", param or name
+        )
     return value
 
 
@@ -61,9 +65,9 @@ def check_vector2(name: str, value) -> np.ndarray:
     except (TypeError, ValueError):
         raise TypeError(f"{name} must be two numbers (x, y), got {value!r}") from None
     if v.shape != (2,):
-        raise ValueError(f"{name} must be two numbers (x, y), got shape {v.shape}")
+        raise InputError(f"{name} must be two numbers (x, y), got shape {v.shape}", name)
     if not np.all(np.isfinite(v)):
-        raise ValueError(f"{name} must be finite, got {value!r}")
+        raise InputError(f"{name} must be finite, got {value!r}", name)
     return v
 
 
@@ -76,9 +80,9 @@ def as_displacement(u, n: int, name: str = "u") -> np.ndarray:
     if a.shape == (2 * n,):
         a = a.reshape(n, 2)
     if a.shape != (n, 2):
-        raise ValueError(f"{name} must have shape ({n}, 2) or ({2 * n},), got {a.shape}")
+        raise InputError(f"{name} must have shape ({n}, 2) or ({2 * n},), got {a.shape}", name)
     if not np.all(np.isfinite(a)):
-        raise ValueError(f"{name} contains non-finite values")
+        raise InputError(f"{name} contains non-finite values", name)
     return a
 
 
@@ -89,7 +93,7 @@ def as_strain(eps, name: str = "eps") -> np.ndarray:
     except (TypeError, ValueError):
         raise TypeError(f"{name} must be a 2x2 numeric matrix") from None
     if e.shape != (2, 2):
-        raise ValueError(f"{name} must have shape (2, 2), got {e.shape}")
+        raise InputError(f"{name} must have shape (2, 2), got {e.shape}", name)
     if not np.all(np.isfinite(e)):
-        raise ValueError(f"{name} must be finite")
+        raise InputError(f"{name} must be finite", name)
     return e

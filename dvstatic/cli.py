@@ -1,4 +1,4 @@
-"""Command line.
+"""Command line of dvstatic.
 
 ::
 
@@ -8,8 +8,9 @@
     dvstatic demo
     dvstatic --version
 
-Exit codes: 0 success, 2 bad input (scene, arguments, files), 3 the solver refused or
-failed (unstable lattice, no convergence), 130 interrupted.
+Exit codes: 0 success, 2 bad input (scene, arguments, files, a missing optional
+engine), 3 the solver refused or failed (unstable lattice, no convergence), 4 best
+effort: an unconverged result was written, 130 interrupted.
 """
 
 from __future__ import annotations
@@ -25,7 +26,8 @@ from pathlib import Path
 
 import numpy as np
 
-from . import __version__
+from ._version import __version__
+from .errors import InputError, MissingDependencyError, SolverError
 
 log = logging.getLogger("dvstatic")
 
@@ -33,7 +35,10 @@ log = logging.getLogger("dvstatic")
 def _demo(args: argparse.Namespace) -> int:
     """Paper exp. 3 on a lattice: uniaxial compression of the unit square, DV and RV
     against the analytic plane-stress solution, with direct and AMG solves."""
-    import dvstatic as dv
+    from .lattice import DV, RV
+    from .mesh import rectangle
+    from .problem import Fix, Traction
+    from .solvers import solve
 
     E, nu = 1e5, 0.2
     print("dvstatic demo: unit square, sigma_xx = -1 (paper exp. 3), E = 1e5, nu = 0.2")
@@ -42,16 +47,16 @@ def _demo(args: argparse.Namespace) -> int:
         f"{'u_x(right)':>11} {'exact':>11} {'seconds':>8}"
     )
     for h in args.h:
-        mesh = dv.mesh.rectangle(1.0, 1.0, h, kind="lattice")
+        mesh = rectangle(1.0, 1.0, h, kind="lattice")
         exact = np.c_[-mesh.points[:, 0] / E, nu * mesh.points[:, 1] / E]
-        for cls in (dv.DV, dv.RV):
+        for cls in (DV, RV):
             model = cls(mesh, E, nu)
             for solver in ("direct", "amg"):
                 t0 = time.perf_counter()
-                sol = dv.solve(
+                sol = solve(
                     model,
-                    [dv.Fix("left", x=0), dv.Fix("bottom", y=0)],
-                    [dv.Traction("right", (-1.0, 0.0))],
+                    [Fix("left", x=0), Fix("bottom", y=0)],
+                    [Traction("right", (-1.0, 0.0))],
                     solver=solver,
                 )
                 dt = time.perf_counter() - t0
@@ -59,7 +64,7 @@ def _demo(args: argparse.Namespace) -> int:
                 ux = sol.u[mesh.part_nodes("right"), 0].mean()
                 print(
                     f"{cls.kind:5} {h:7.4f} {mesh.n_points:7d} {solver:>6} "
-                    f"{sol.info['iterations']:5d} {err:9.2e} {ux:11.4e} {-1 / E:11.4e} "
+                    f"{sol.info.iterations:5d} {err:9.2e} {ux:11.4e} {-1 / E:11.4e} "
                     f"{dt:8.3f}"
                 )
     return 0
@@ -70,8 +75,8 @@ def _show_progress(args) -> bool:
 
 
 def _run(args: argparse.Namespace) -> int:
-    import dvstatic as dv
-    from dvstatic import io, scene
+    from . import fem, scene
+    from .solvers import solve
 
     sc = scene.load(args.scene, args.set or ())
     out_dir = Path(args.out) if args.out else Path(f"{sc.name}-out")
@@ -88,16 +93,16 @@ def _run(args: argparse.Namespace) -> int:
     supports = sc.build_supports(mesh)
     loads = sc.build_loads(mesh)
     try:
-        sol = dv.solve(model, supports, loads, progress=_show_progress(args), **sc.solve_options())
-    except ValueError as exc:  # e.g. supports that leave a rigid motion free
-        raise scene.SceneError(sc.path, "supports", str(exc)) from None
+        sol = solve(model, supports, loads, progress=_show_progress(args), **sc.solve_options())
+    except InputError as exc:  # e.g. supports that leave a rigid motion free
+        raise scene.SceneError(sc.path, _solve_error_key(scene, exc), str(exc)) from None
     if sol.u is None:  # an MPI rank other than 0 of a solver="petsc" run: rank 0 writes
         return 0
     o = sc.data["output"]
     fe = None
     if o["fe_compare"]:
         mat = sc.data["material"]
-        fe = dv.fem.solve(
+        fe = fem.solve(
             mesh, mat["E"], mat["nu"], supports, loads, order=o["fe_order"], refine=o["fe_refine"]
         )
     for i, name in enumerate(o["part_stress"]):
@@ -108,8 +113,24 @@ def _run(args: argparse.Namespace) -> int:
                 f"unknown boundary part {name!r}; known parts: "
                 + ", ".join(repr(k) for k in mesh.parts),
             )
-    # everything is written into a staging folder next to the target and swapped in only
-    # when complete: an interrupted or failed run leaves earlier results as they were
+    data, written = _write_outputs(sc, sol, fe, out_dir, args, t0)
+    _print_summary(sc, data, [out_dir / w for w in written])
+    if not sol.info.converged:
+        print(
+            f"warning: the solution did NOT converge (best effort): {sol.info.failure}",
+            file=sys.stderr,
+        )
+        return 4
+    return 0
+
+
+def _write_outputs(sc, sol, fe, out_dir: Path, args, t0: float) -> tuple[dict, list[str]]:
+    """Write VTU, PNG and JSON into a staging folder next to ``out_dir`` and swap it in
+    only when complete: an interrupted or failed run leaves earlier results as they
+    were. Returns the summary data and the file names written."""
+    from . import io
+
+    o = sc.data["output"]
     out_dir.parent.mkdir(parents=True, exist_ok=True)
     stage = out_dir.parent / f".{out_dir.name}.staging-{os.getpid()}"
     shutil.rmtree(stage, ignore_errors=True)
@@ -119,16 +140,15 @@ def _run(args: argparse.Namespace) -> int:
         if o["vtu"]:
             written.append(io.write_vtu(stage / f"{sc.name}.vtu", sol).name)
         if o["png"]:
-            written.append(
-                io.write_png(
-                    stage / f"{sc.name}.png",
-                    sol,
-                    field=o["field"],
-                    scale=o["scale"],
-                    title=sc.data["title"] or None,
-                    stress=o["stress"],
-                ).name
+            png = io.write_png(
+                stage / f"{sc.name}.png",
+                sol,
+                field=o["field"],
+                scale=o["scale"],
+                title=sc.data["title"] or None,
+                stress=o["stress"],
             )
+            written.append(png.name)
         data = io.summary(sol, fe=fe, probes=o["probes"] or None, part_stress=o["part_stress"])
         data["scene"] = {
             "file": str(sc.path),
@@ -147,14 +167,15 @@ def _run(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         raise
-    _print_summary(sc, data, [out_dir / w for w in written])
-    if sol.info.get("converged") is False:
-        print(
-            f"warning: the solution did NOT converge (best effort): {sol.info.get('failure')}",
-            file=sys.stderr,
-        )
-        return 4
-    return 0
+    return data, written
+
+
+def _solve_error_key(scene, exc: InputError) -> str:
+    """The scene key an input error of ``solve()`` is about ("" when none is)."""
+    options = {name: key for key, name in scene.SOLVER_KEYS.items()}
+    if exc.param in options:
+        return f"solver.{options[exc.param]}"
+    return "supports" if exc.param == "supports" else ""
 
 
 def _swap_in(stage: Path, out_dir: Path) -> None:
@@ -357,13 +378,14 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "command", None):
         parser.print_help()
         return 2
-    from .linalg import SolverError
-
     try:
         return args.func(args)
     except SolverError as exc:
         print(f"error: the solver refused or failed: {exc}", file=sys.stderr)
         return 3
+    except MissingDependencyError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     except (ValueError, TypeError, FileNotFoundError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

@@ -23,11 +23,20 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ._checks import check_int, check_positive, check_real
-from .linalg import DirectSolver, SolverError
-from .loads import BodyForce, Fix, PointLoad, Traction, as_list, select_edges, select_nodes
+from ._checks import check_int
+from .errors import InputError, SingularError
+from .linalg import DirectSolver, nested_dissection
+from .material import lame_plane_stress
 from .mesh import Mesh
-from .ordering import nested_dissection
+from .problem import (
+    BodyForce,
+    PointLoad,
+    Traction,
+    as_list,
+    select_edges,
+    select_nodes,
+    support_components,
+)
 
 if TYPE_CHECKING:  # annotations only: scipy is imported where it is used
     import scipy.sparse as sp
@@ -36,18 +45,6 @@ if TYPE_CHECKING:  # annotations only: scipy is imported where it is used
 log = logging.getLogger(__name__)
 
 __all__ = ["lame_plane_stress", "FESolution", "solve", "Comparison", "compare"]
-
-
-def lame_plane_stress(E: float, nu: float) -> tuple[float, float]:
-    """Plane-stress Lame constants ``lambda* = E nu / (1 - nu^2)``, ``mu = E / (2 (1 + nu))``.
-
-    (scikit-fem's ``lame_parameters`` returns the plane-strain / 3-D ``lambda``.)
-    """
-    E = check_positive("E", E)
-    nu = check_real("nu", nu)
-    if not -1.0 < nu < 1.0:
-        raise ValueError(f"nu must lie in -1 < nu < 1 for plane stress, got {nu}")
-    return E * nu / (1.0 - nu**2), E / (2.0 * (1.0 + nu))
 
 
 @dataclass(frozen=True, eq=False)
@@ -78,7 +75,7 @@ class FESolution:
         """Displacement at arbitrary points inside the mesh, shape (n, 2)."""
         p = np.atleast_2d(np.asarray(points, dtype=float))
         if p.ndim != 2 or p.shape[1] != 2:
-            raise ValueError(f"points must have shape (n, 2), got {p.shape}")
+            raise InputError(f"points must have shape (n, 2), got {p.shape}", "points")
         probe = self._basis.probes(np.ascontiguousarray(p.T))
         v = probe @ self._x
         n = len(p)
@@ -98,7 +95,7 @@ class FESolution:
 
         p = np.atleast_2d(np.asarray(points, dtype=float))
         if p.ndim != 2 or p.shape[1] != 2:
-            raise ValueError(f"points must have shape (n, 2), got {p.shape}")
+            raise InputError(f"points must have shape (n, 2), got {p.shape}", "points")
         if self._stress_nodal is None:
             lam, mu = self.info["lame"]
             g = self._basis.interpolate(self._x).grad  # (2, 2, elements, quadrature points)
@@ -172,7 +169,7 @@ def solve(
     if not isinstance(mesh, Mesh):
         raise TypeError(f"mesh must be a dvstatic Mesh, got {type(mesh).__name__}")
     if mesh.is_periodic:
-        raise ValueError("the FE reference needs a bounded mesh")
+        raise InputError("the FE reference needs a bounded mesh", "mesh")
     lam, mu = lame_plane_stress(E, nu)
     order = check_int("order", order, minimum=1, maximum=2)
     refine = check_int("refine", refine, minimum=0, maximum=8)
@@ -184,74 +181,15 @@ def solve(
     basis = skfem.Basis(fm, elem)
     t1 = time.perf_counter()
     K = skfem.asm(linear_elasticity(lam, mu), basis)
-    f = np.zeros(basis.N)
-    nodal = basis.nodal_dofs  # (2, n_vertices)
-    for load in as_list(loads, "Traction, BodyForce or PointLoad"):
-        if isinstance(load, Traction):
-            edges = select_edges(mesh, load.where, "Traction")
-            facets = _facets_on_edges(fm, mesh.points, edges)
-            fb = skfem.FacetBasis(fm, elem, facets=facets)
-            t = np.asarray(load.value, dtype=float)
-
-            @skfem.LinearForm
-            def traction(v, w, t=t):
-                return t[0] * v[0] + t[1] * v[1]
-
-            f += skfem.asm(traction, fb)
-        elif isinstance(load, BodyForce):
-            bvec = np.asarray(load.value, dtype=float)
-
-            @skfem.LinearForm
-            def body(v, w, bvec=bvec):
-                return bvec[0] * v[0] + bvec[1] * v[1]
-
-            f += skfem.asm(body, basis)
-        elif isinstance(load, PointLoad):
-            nodes = select_nodes(mesh, load.nodes, "PointLoad")
-            for c in range(2):
-                np.add.at(f, nodal[c, nodes], load.value[c])
-        else:
-            raise TypeError(f"unknown load type {type(load).__name__}")
-    dof_list, val_list = [], []
-    for s in as_list(supports, "Fix"):
-        if not isinstance(s, Fix):
-            raise TypeError(f"supports must be Fix objects, got {type(s).__name__}")
-        if isinstance(s.where, str):
-            facets = _facets_on_edges(fm, mesh.points, mesh.part_edges(s.where))
-            dofs = basis.get_dofs(facets=facets)
-            comps = {"u^1": s.x, "u^2": s.y}
-            for name, value in comps.items():
-                if value is None:
-                    continue
-                if np.ndim(value) != 0:
-                    raise ValueError(
-                        "FE reference: a prescribed value on a named part must be a scalar "
-                        "(per-node values are supported on node index arrays)"
-                    )
-                idx = np.asarray(dofs.all(name), dtype=np.int64)
-                dof_list.append(idx)
-                val_list.append(np.full(idx.size, float(value)))
-        else:
-            nodes = select_nodes(mesh, s.where, "Fix")
-            for c, value in ((0, s.x), (1, s.y)):
-                if value is None:
-                    continue
-                v = np.broadcast_to(np.asarray(value, dtype=float), nodes.shape)
-                dof_list.append(nodal[c, nodes])
-                val_list.append(np.asarray(v))
-    if not dof_list:
-        raise ValueError("no supports: the FE problem is singular")
-    D = np.concatenate(dof_list)
-    vals = np.concatenate(val_list)
-    D, first = np.unique(D, return_index=True)
-    vals = vals[first]
+    f = _load_vector(mesh, fm, elem, basis, loads)
+    D, vals = _prescribed(mesh, fm, basis, supports)
     x = np.zeros(basis.N)
     x[D] = vals
     A, b, x_free, free = skfem.condense(K, f, x=x, D=D)
     t2 = time.perf_counter()
-    x_free = _solve_spd(A, b, basis.doflocs[:, free].T)
-    x[free] = x_free
+    x[free] = _solve_spd(A, b, basis.doflocs[:, free].T)
     t3 = time.perf_counter()
+    nodal = basis.nodal_dofs
     u = np.c_[x[nodal[0, : mesh.n_points]], x[nodal[1, : mesh.n_points]]]
     info = {
         "n_dof": int(basis.N),
@@ -263,6 +201,63 @@ def solve(
     return FESolution(mesh, u, order, refine, info, basis, x)
 
 
+def _load_vector(mesh: Mesh, fm, elem, basis, loads) -> np.ndarray:
+    """Consistent load vector: tractions integrated along the facets of their edges,
+    body forces over the elements, point loads on the lattice nodes."""
+    import skfem
+
+    f = np.zeros(basis.N)
+    for load in as_list(loads, "Traction, BodyForce or PointLoad"):
+        if isinstance(load, Traction):
+            edges = select_edges(mesh, load.where, "Traction")
+            fb = skfem.FacetBasis(fm, elem, facets=_facets_on_edges(fm, mesh.points, edges))
+            f += skfem.asm(_constant_form(np.asarray(load.value, dtype=float)), fb)
+        elif isinstance(load, BodyForce):
+            f += skfem.asm(_constant_form(np.asarray(load.value, dtype=float)), basis)
+        elif isinstance(load, PointLoad):
+            nodes = select_nodes(mesh, load.nodes, "PointLoad")
+            for c in range(2):
+                np.add.at(f, basis.nodal_dofs[c, nodes], load.value[c])
+        else:
+            raise TypeError(f"unknown load type {type(load).__name__}")
+    return f
+
+
+def _constant_form(value: np.ndarray):
+    import skfem
+
+    @skfem.LinearForm
+    def form(v, w):
+        return value[0] * v[0] + value[1] * v[1]
+
+    return form
+
+
+def _prescribed(mesh: Mesh, fm, basis, supports) -> tuple[np.ndarray, np.ndarray]:
+    """Prescribed FE dofs and values: every dof on the facets of a named part, the
+    vertex dofs of supports on node index arrays."""
+    dof_list, val_list = [], []
+    for where, comp, nodes, value in support_components(mesh, supports):
+        if isinstance(where, str):
+            if np.ndim(value) != 0:
+                raise InputError(
+                    "FE reference: a prescribed value on a named part must be a scalar "
+                    "(per-node values are supported on node index arrays)",
+                    "xy"[comp],
+                )
+            facets = _facets_on_edges(fm, mesh.points, mesh.part_edges(where))
+            idx = np.asarray(basis.get_dofs(facets=facets).all(f"u^{comp + 1}"), dtype=np.int64)
+            dof_list.append(idx)
+            val_list.append(np.full(idx.size, float(value)))
+        else:
+            dof_list.append(basis.nodal_dofs[comp, nodes])
+            val_list.append(np.broadcast_to(np.asarray(value, dtype=float), nodes.shape))
+    if not dof_list:
+        raise InputError("no supports: the FE problem is singular", "supports")
+    D, first = np.unique(np.concatenate(dof_list), return_index=True)
+    return D, np.concatenate(val_list)[first]
+
+
 def _solve_spd(A: sp.spmatrix, b: np.ndarray, locs: np.ndarray) -> np.ndarray:
     """Direct solve with a nested-dissection ordering on the dof locations."""
     import scipy.sparse as sp
@@ -272,10 +267,10 @@ def _solve_spd(A: sp.spmatrix, b: np.ndarray, locs: np.ndarray) -> np.ndarray:
     order = nested_dissection(locs + 1e-12 * np.arange(len(locs))[:, None], np.c_[coo.row, coo.col])
     lu = DirectSolver(A, order=order)
     if lu.negative_pivots:
-        raise SolverError("the FE stiffness is not positive definite: check the supports")
+        raise SingularError("the FE stiffness is not positive definite: check the supports")
     x, info = lu.solve(b)
     if not np.all(np.isfinite(x)) or info["residuals"][-1] > 1e-8:
-        raise SolverError(f"FE solve failed (relative residual {info['residuals'][-1]:.2e})")
+        raise SingularError(f"FE solve failed (relative residual {info['residuals'][-1]:.2e})")
     return x
 
 
@@ -307,14 +302,15 @@ def compare(a, b) -> Comparison:
     ua = np.asarray(getattr(a, "u", a), dtype=float)
     ub = np.asarray(getattr(b, "u", b), dtype=float)
     if ua.shape != ub.shape or ua.ndim != 2 or ua.shape[1] != 2:
-        raise ValueError(
-            f"compare needs two (N, 2) fields on the same nodes, got {ua.shape} and {ub.shape}"
+        raise InputError(
+            f"compare needs two (N, 2) fields on the same nodes, got {ua.shape} and {ub.shape}",
+            "b",
         )
     d = ua - ub
     nb = float(np.linalg.norm(ub))
     mb = float(np.max(np.hypot(ub[:, 0], ub[:, 1])))
     if nb == 0:
-        raise ValueError("the reference field is zero: relative errors are undefined")
+        raise InputError("the reference field is zero: relative errors are undefined", "b")
     return Comparison(
         float(np.linalg.norm(d) / nb), float(np.max(np.hypot(d[:, 0], d[:, 1])) / mb), d
     )

@@ -17,7 +17,11 @@ from pathlib import Path
 
 import numpy as np
 
+from .errors import InputError
+from .fem import compare
 from .mesh import Mesh
+from .mesh.locate import interpolate
+from .problem import select_nodes
 
 log = logging.getLogger(__name__)
 
@@ -64,20 +68,21 @@ def read_mesh(path: str | Path) -> Mesh:
 
     path = Path(path)
     if not path.is_file():
-        raise ValueError(f"mesh file not found: {path}")
+        raise InputError(f"mesh file not found: {path}", "path")
     try:
         m = meshio.read(path)
     except (Exception, SystemExit) as exc:  # meshio raises many types, even SystemExit
-        raise ValueError(f"cannot read mesh file {path}: {exc}") from None
+        raise InputError(f"cannot read mesh file {path}: {exc}", "path") from None
     pts = np.asarray(m.points, dtype=float)
     if pts.shape[1] == 3:
         if np.any(np.abs(pts[:, 2]) > 1e-12 * max(1.0, np.abs(pts[:, :2]).max())):
-            raise ValueError(f"{path}: points are not planar (z != 0); dvstatic is 2-D")
+            raise InputError(f"{path}: points are not planar (z != 0); dvstatic is 2-D", "path")
         pts = pts[:, :2]
     tris = [c.data[:, :3] for c in m.cells if c.type in ("triangle", "triangle6")]
     if not tris:
-        raise ValueError(
-            f"{path}: no triangle cells found (cell types: {sorted({c.type for c in m.cells})})"
+        raise InputError(
+            f"{path}: no triangle cells found (cell types: {sorted({c.type for c in m.cells})})",
+            "path",
         )
     tri = np.vstack(tris).astype(np.int64)
     used = np.unique(tri)
@@ -97,7 +102,9 @@ def read_mesh(path: str | Path) -> Mesh:
             for tag in np.unique(tags):
                 sel = edges[np.asarray(tags) == tag]
                 if np.any(remap[sel] < 0):
-                    raise ValueError(f"{path}: line group {tag} uses points outside the triangles")
+                    raise InputError(
+                        f"{path}: line group {tag} uses points outside the triangles", "path"
+                    )
                 parts.setdefault(names.get(int(tag), f"group{int(tag)}"), []).append(remap[sel])
     parts_arr = {k: np.vstack(v) for k, v in parts.items()}
     mesh = Mesh(pts[used], remap[tri], parts=parts_arr)
@@ -109,7 +116,7 @@ def nodal_field(solution, name: str, stress: str = "virial") -> np.ndarray:
     """A nodal scalar field of a solution by name (see :data:`FIELDS`); stress fields
     use the recovery ``stress`` ("virial" or "strain", see ``Solution.stress``)."""
     if name not in FIELDS:
-        raise ValueError(f"unknown field {name!r}; accepted: {', '.join(FIELDS)}")
+        raise InputError(f"unknown field {name!r}; accepted: {', '.join(FIELDS)}", "field")
     u = solution.u
     if name == "|u|":
         return np.hypot(u[:, 0], u[:, 1])
@@ -127,7 +134,7 @@ def nodal_field(solution, name: str, stress: str = "virial") -> np.ndarray:
         if name == "sxy":
             return sxy
         return np.sqrt(sxx**2 - sxx * syy + syy**2 + 3 * sxy**2)
-    raise ValueError(f"unknown field {name!r}; accepted: {', '.join(FIELDS)}")
+    raise InputError(f"unknown field {name!r}; accepted: {', '.join(FIELDS)}", "field")
 
 
 def write_vtu(path: str | Path, solution, stress: bool = True) -> Path:
@@ -187,96 +194,120 @@ def summary(solution, fe=None, probes=None, part_stress=()) -> dict:
         virial stress (``lattice``), the strain-based recovery (``lattice_strain``,
         better at free surfaces) and, with ``fe``, the FE stress at the same nodes.
     """
-    from .fem import compare
-    from .loads import select_nodes
-    from .post import interpolate
-
-    model = solution.model
-    mesh = model.mesh
     info = solution.info
     out = {
-        "mesh": {
-            "nodes": mesh.n_points,
-            "bonds": mesh.n_bonds,
-            "triangles": mesh.n_triangles,
-            "area": mesh.area,
-            "mean_bond_length": mesh.h,
-            "sigma_L": mesh.edge_length_spread(),
-            "parts": sorted(mesh.parts),
-        },
-        "model": {
-            "type": model.kind,
-            "E": model.E,
-            "nu": model.nu,
-            "calibration": model.calibration,
-            "k_n": model.k_n,
-            "nu_m": model.nu_m,
-        },
+        "mesh": _mesh_summary(solution.model.mesh),
+        "model": _model_summary(solution.model),
         "max_displacement": solution.max_displacement,
-        "reactions": {"total": solution.reactions.sum(axis=0).tolist()},
-        "solver": {
-            k: info[k]
-            for k in (
-                "solver",
-                "nonlinear",
-                "converged",
-                "iterations",
-                "residual",
-                "seconds",
-                "reused",
-                "n_dof",
-                "parallel",
-            )
-            if k in info
-        },
+        "reactions": _reactions(solution),
+        "solver": _solver_summary(info),
     }
-    for i, s in enumerate(solution.supports):
-        nodes = select_nodes(mesh, s.where, "Fix")
-        key = s.where if isinstance(s.where, str) else f"support{i}"
-        out["reactions"][key] = solution.reactions[nodes].sum(axis=0).tolist()
-    if not info.get("nonlinear"):
+    if not info.nonlinear:
         out["strain_energy"] = solution.energy()
     else:
-        out["solver"]["steps"] = len(info.get("steps", []))
-    stress = None
-    if (probes is not None and len(probes)) or part_stress:
-        stress = solution.stress()
+        out["solver"]["steps"] = len(info.steps)
+    stress = solution.stress() if (probes is not None and len(probes)) or part_stress else None
     p = None
     if probes is not None and len(probes):
         p = np.asarray(probes, dtype=float).reshape(-1, 2)
-        out["probes"] = {
-            "points": p.tolist(),
-            "displacement": interpolate(mesh, solution.u, p).tolist(),
-            "stress": interpolate(mesh, stress.reshape(-1, 4), p).reshape(-1, 2, 2).tolist(),
-        }
+        out["probes"] = _probes(solution, stress, p, fe)
     if part_stress:
-        strain_s = solution.stress("strain")
-        out["part_stress"] = {}
-        for name in part_stress:
-            nodes = mesh.part_nodes(name)
-            rec = {
-                "nodes": int(nodes.size),
-                "lattice": _stress_extremes(stress[nodes]),
-                "lattice_strain": _stress_extremes(strain_s[nodes]),
-            }
-            if fe is not None:
-                rec["fe"] = _stress_extremes(fe.stress(mesh.points[nodes]))
-            out["part_stress"][name] = rec
+        out["part_stress"] = _part_stress(solution, stress, part_stress, fe)
     if fe is not None:
-        c = compare(solution, fe)
-        out["fe"] = {
-            "order": fe.order,
-            "refine": fe.refine,
-            "n_dof": fe.info["n_dof"],
-            "seconds": fe.info["seconds"],
-            "rel_l2_difference": c.l2,
-            "rel_max_difference": c.max,
-            "max_displacement": fe.max_displacement,
-        }
-        if p is not None:
-            out["probes"]["fe_displacement"] = fe.evaluate(p).tolist()
-            out["probes"]["fe_stress"] = fe.stress(p).tolist()
+        out["fe"] = _fe_summary(solution, fe)
     return out
+
+
+def _mesh_summary(mesh: Mesh) -> dict:
+    return {
+        "nodes": mesh.n_points,
+        "bonds": mesh.n_bonds,
+        "triangles": mesh.n_triangles,
+        "area": mesh.area,
+        "mean_bond_length": mesh.h,
+        "sigma_L": mesh.edge_length_spread(),
+        "parts": sorted(mesh.parts),
+    }
+
+
+def _model_summary(model) -> dict:
+    return {
+        "type": model.kind,
+        "E": model.E,
+        "nu": model.nu,
+        "calibration": model.micro.calibration,
+        "k_n": model.k_n,
+        "nu_m": model.nu_m,
+    }
+
+
+def _solver_summary(info) -> dict:
+    out = {
+        "solver": info.solver,
+        "nonlinear": info.nonlinear,
+        "converged": info.converged,
+        "iterations": info.iterations,
+        "residual": info.residual,
+        "seconds": info.seconds.as_dict(),
+        "reused": list(info.reused),
+        "n_dof": info.n_dof,
+    }
+    if info.parallel is not None:
+        out["parallel"] = info.parallel.as_dict()
+    return out
+
+
+def _reactions(solution) -> dict:
+    mesh = solution.model.mesh
+    out = {"total": solution.reactions.sum(axis=0).tolist()}
+    for i, s in enumerate(solution.supports):
+        nodes = select_nodes(mesh, s.where, "Fix")
+        key = s.where if isinstance(s.where, str) else f"support{i}"
+        out[key] = solution.reactions[nodes].sum(axis=0).tolist()
+    return out
+
+
+def _probes(solution, stress: np.ndarray, p: np.ndarray, fe) -> dict:
+    mesh = solution.model.mesh
+    out = {
+        "points": p.tolist(),
+        "displacement": interpolate(mesh, solution.u, p).tolist(),
+        "stress": interpolate(mesh, stress.reshape(-1, 4), p).reshape(-1, 2, 2).tolist(),
+    }
+    if fe is not None:
+        out["fe_displacement"] = fe.evaluate(p).tolist()
+        out["fe_stress"] = fe.stress(p).tolist()
+    return out
+
+
+def _part_stress(solution, stress: np.ndarray, names, fe) -> dict:
+    mesh = solution.model.mesh
+    strain_s = solution.stress("strain")
+    out = {}
+    for name in names:
+        nodes = mesh.part_nodes(name)
+        rec = {
+            "nodes": int(nodes.size),
+            "lattice": _stress_extremes(stress[nodes]),
+            "lattice_strain": _stress_extremes(strain_s[nodes]),
+        }
+        if fe is not None:
+            rec["fe"] = _stress_extremes(fe.stress(mesh.points[nodes]))
+        out[name] = rec
+    return out
+
+
+def _fe_summary(solution, fe) -> dict:
+    c = compare(solution, fe)
+    return {
+        "order": fe.order,
+        "refine": fe.refine,
+        "n_dof": fe.info["n_dof"],
+        "seconds": fe.info["seconds"],
+        "rel_l2_difference": c.l2,
+        "rel_max_difference": c.max,
+        "max_displacement": fe.max_displacement,
+    }
 
 
 def _stress_extremes(s: np.ndarray) -> dict:
@@ -329,7 +360,7 @@ def write_png(
     if scale is None:
         size = float(np.max(np.ptp(mesh.points, axis=0)))
         umax = solution.max_displacement
-        scale = 1.0 if solution.info.get("nonlinear") or umax == 0 else 0.1 * size / umax
+        scale = 1.0 if solution.info.nonlinear or umax == 0 else 0.1 * size / umax
     lo, hi = mesh.points.min(axis=0), mesh.points.max(axis=0)
     aspect = (hi[1] - lo[1]) / max(hi[0] - lo[0], 1e-300)
     fig, axes = plot.figure(1, 1, (9.0, max(3.0, min(9.0, 9.0 * aspect + 1.0))))

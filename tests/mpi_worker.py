@@ -60,8 +60,9 @@ def main(out: str) -> None:
             arrays[f"u{i}"] = sol.u
             arrays[f"r{i}"] = sol.reactions
             infos[i] = {
-                "iterations": sol.info["iterations"],
-                "ranks": sol.info["parallel"]["ranks"],
+                "iterations": sol.info.iterations,
+                "step_iterations": [st.iterations for st in sol.info.steps],
+                "ranks": sol.info.parallel.ranks,
                 "k_n": m.k_n,
                 "nu_m": m.nu_m,
             }

@@ -6,8 +6,8 @@ import scipy.linalg
 
 import dvstatic as dv
 from conftest import E_BEAM, NU, rel_l2, uniaxial_exact, uniaxial_problem
-from dvstatic.loads import constraints
 from dvstatic.post import interpolate
+from dvstatic.problem import constraints
 
 
 @pytest.fixture(scope="module")
@@ -129,7 +129,7 @@ def test_stability_matches_dense_eigenvalues(cls, nu):
     model = cls(m, E_BEAM, nu)
     rep = dv.stability(model, sup)
     # direct dense computation of the generalised problem K1 v = lambda K0 v
-    from dvstatic.stability import _parts
+    from dvstatic.solvers.stability import stiffness_parts as _parts
 
     K0, K1 = _parts(model)
     dofs, _ = constraints(m, sup)
@@ -156,13 +156,13 @@ def test_unstable_refused_with_range_and_edge_case_solves():
     model = dv.DV(m, E_BEAM, nu_edge)
     assert dv.stability(model, sup).stable
     sol = dv.solve(model, sup, ld)
-    assert sol.info["stability"]["negative_eigenvalues"] == 0
-    assert sol.info["stability"]["method"] == "ldl-inertia"
+    assert sol.info.stability.negative_eigenvalues == 0
+    assert sol.info.stability.method == "ldl-inertia"
 
 
 def test_stability_check_cost_reported_for_amg():
     m = dv.mesh.rectangle(1.0, 1.0, 0.05, kind="lattice")
     sup, ld = uniaxial_problem()
     sol = dv.solve(dv.RV(m, E_BEAM, NU), sup, ld, solver="amg")
-    st = sol.info["stability"]
-    assert st["checked"] and st["negative_eigenvalues"] == 0 and st["seconds"] >= 0
+    st = sol.info.stability
+    assert st.checked and st.negative_eigenvalues == 0 and st.seconds >= 0

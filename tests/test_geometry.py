@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 import dvstatic as dv
-from dvstatic import geometry
+from dvstatic.lattice import geometry
 
 
 @pytest.mark.parametrize(

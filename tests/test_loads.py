@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 import dvstatic as dv
-from dvstatic.loads import constraints, load_vector
+from dvstatic.problem import constraints, load_vector
 
 
 def test_body_force_total_is_value_times_area():

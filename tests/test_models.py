@@ -59,7 +59,7 @@ def test_periodic_lattice_homogeneous_strain_has_no_residual(cls, nu):
     t = model.linear_tension(u, strain=eps)
     b = m.topology.bonds
     fl = np.zeros((m.n_points, 2))
-    from dvstatic import geometry
+    from dvstatic.lattice import geometry
 
     d = geometry.of(m).direction
     for c in range(2):
@@ -72,7 +72,7 @@ def test_periodic_lattice_homogeneous_strain_has_no_residual(cls, nu):
 def test_dv_calibration_is_paper_eqs_9_10(jittered_small):
     E, nu = 2e5, 0.27
     model = dv.DV(jittered_small, E, nu)
-    from dvstatic import geometry
+    from dvstatic.lattice import geometry
 
     g = geometry.of(jittered_small)
     area = jittered_small.area

@@ -82,7 +82,7 @@ def test_small_load_nonlinear_equals_linear(cls):
     nl = dv.solve(model, sup, ld, nonlinear=True, steps=1)
     strain = 1.0 / E_BEAM
     assert np.linalg.norm(nl.u - lin.u) <= 10 * strain * np.linalg.norm(lin.u)
-    assert nl.info["nonlinear"] and nl.info["converged"]
+    assert nl.info.nonlinear and nl.info.converged
 
 
 @pytest.mark.parametrize("cls", MODELS)
@@ -92,15 +92,15 @@ def test_newton_quadratic_at_five_percent_strain(cls, solver):
     model = cls(m, E_BEAM, NU)
     sup = [dv.Fix("left", x=0.0), dv.Fix("bottom", y=0.0), dv.Fix("right", x=0.05)]
     sol = dv.solve(model, sup, [], nonlinear=True, steps=1, solver=solver)
-    steps = sol.info["steps"]
+    steps = sol.info.steps
     assert len(steps) == 1
     st = steps[0]
-    assert st["iterations"] <= 5
-    r = np.array(st["residuals"][1:])  # after the prescribed jump
+    assert st.iterations <= 5
+    r = np.array(st.residuals[1:])  # after the prescribed jump
     # quadratic: log r_{k+1} / log r_k -> 2 (relative to the first residual)
     q = np.log(r[2] / r[0]) / np.log(r[1] / r[0])
     assert q >= 1.8
-    assert sol.info["tangent_builds"] >= 1
+    assert sol.info.tangent_builds >= 1
     nodes = m.part_nodes("right")
     np.testing.assert_allclose(sol.u[nodes, 0], 0.05, rtol=1e-12)
 
@@ -113,7 +113,7 @@ def test_nonlinear_amg_matches_direct():
     a = dv.solve(model, sup, ld, nonlinear=True, steps=2, solver="direct")
     b = dv.solve(model, sup, ld, nonlinear=True, steps=2, solver="amg")
     assert np.linalg.norm(a.u - b.u) <= 1e-8 * np.linalg.norm(a.u)
-    assert b.info["solver"] == "amg"
+    assert b.info.solver == "amg"
 
 
 @pytest.mark.parametrize("cls", MODELS)
@@ -126,7 +126,7 @@ def test_buckled_strip_is_refused(cls):
     below = dv.solve(
         model, dv.Fix("left"), dv.Traction("right", (-0.3 * p_cr / H, 0.0)), nonlinear=True, steps=2
     )
-    assert below.info["converged"]
+    assert below.info.converged
     with pytest.raises(dv.SolverError, match="unstable equilibrium"):
         dv.solve(
             model,

@@ -14,7 +14,7 @@ def test_dynamic_relaxation_matches_direct(cls):
     sup, ld = uniaxial_problem()
     ref = dv.solve(model, sup, ld, solver="direct")
     dr = dv.solve(model, sup, ld, solver="dynamic-relaxation", rtol=1e-9)
-    assert dr.info["solver"] == "dynamic-relaxation" and dr.info["iterations"] > 100
+    assert dr.info.solver == "dynamic-relaxation" and dr.info.iterations > 100
     assert np.linalg.norm(dr.u - ref.u) <= 1e-7 * np.linalg.norm(ref.u)
     np.testing.assert_allclose(dr.reactions.sum(axis=0), ref.reactions.sum(axis=0), atol=1e-6)
 
@@ -43,20 +43,20 @@ def test_factorisation_reused_across_load_cases(solver, what):
     sup, _ = uniaxial_problem()
     a = dv.solve(model, sup, dv.Traction("right", (-1.0, 0.0)), solver=solver)
     b = dv.solve(model, sup, dv.Traction("right", (-2.0, 0.0)), solver=solver)
-    assert what not in a.info["reused"] and what in b.info["reused"]
-    assert "assembly" in b.info["reused"] and "geometry" in b.info["reused"]
+    assert what not in a.info.reused and what in b.info.reused
+    assert "assembly" in b.info.reused and "geometry" in b.info.reused
     np.testing.assert_allclose(b.u, 2 * a.u, rtol=1e-7, atol=1e-14)
     # other supports: a new factorisation
     c = dv.solve(model, [dv.Fix("left")], dv.Traction("right", (-1.0, 0.0)), solver=solver)
-    assert what not in c.info["reused"]
+    assert what not in c.info.reused
 
 
 def test_coupling_skipped_when_nu_m_is_zero():
     m = dv.mesh.rectangle(1.0, 1.0, 0.1, kind="jittered", seed=1)
     sup, ld = uniaxial_problem()
     sol = dv.solve(dv.DV(m, E_BEAM, 1.0 / 3.0), sup, ld)
-    assert sol.info["coupling_assembled"] is False
-    assert dv.solve(dv.DV(m, E_BEAM, NU), sup, ld).info["coupling_assembled"] is True
+    assert sol.info.coupling_assembled is False
+    assert dv.solve(dv.DV(m, E_BEAM, NU), sup, ld).info.coupling_assembled is True
 
 
 def test_newton_preconditioner_rebuilt_at_most_once_per_step():
@@ -64,6 +64,6 @@ def test_newton_preconditioner_rebuilt_at_most_once_per_step():
     model = dv.RV(m, E_BEAM, NU)
     sup = [dv.Fix("left", x=0.0), dv.Fix("bottom", y=0.0), dv.Fix("right", x=0.05)]
     sol = dv.solve(model, sup, [], nonlinear=True, steps=2, solver="amg")
-    steps = sol.info["steps"]
-    assert all(s["iterations"] <= 5 for s in steps)
-    assert sol.info["tangent_builds"] <= len(steps)
+    steps = sol.info.steps
+    assert all(s.iterations <= 5 for s in steps)
+    assert sol.info.tangent_builds <= len(steps)

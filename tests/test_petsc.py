@@ -16,7 +16,8 @@ import numpy as np
 import pytest
 
 import dvstatic as dv
-from dvstatic import calibration, distributed
+from dvstatic import parallel as distributed
+from dvstatic.lattice import calibration
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
@@ -46,7 +47,7 @@ def test_rcb_partition_is_balanced_and_compact():
 
 @pytest.mark.parametrize("cls", [dv.DV, dv.RV])
 @pytest.mark.parametrize("bonds", ["uniform", "voronoi"])
-def test_patch_rows_equal_global_rows(cls, bonds):
+def test_patch_rows_equal_global_rows(cls, bonds, monkeypatch):
     """What makes the distributed assembly exact: on every rank's patch, the rows of
     the owned nodes (stiffness, tangent, internal force) equal the global ones, and the
     calibration sums over owned bonds and triangles add up to the global moments."""
@@ -73,8 +74,7 @@ def test_patch_rows_equal_global_rows(cls, bonds):
         ul = u[lay.local_nodes]
         assert abs(pm.tangent(ul)[:n2] - Kt[rows][:, gd]).max() < 1e-9 * abs(Kt).max()
         assert np.allclose(pm.internal_force(ul)[:n2], fi[rows], rtol=0, atol=1e-9 * abs(fi).max())
-        from dvstatic import geometry
-        from dvstatic.models import voronoi_weights
+        from dvstatic.lattice import geometry, voronoi_weights
 
         g = geometry.of(lay.patch)
         own_b, own_t = distributed.owned_bonds(lay), distributed.owned_triangles(lay)
@@ -83,8 +83,9 @@ def test_patch_rows_equal_global_rows(cls, bonds):
 
     assert np.all(covered == 1)
     # the helper the PETSc path uses, on one "rank" (no reduction needed)
+    monkeypatch.setenv("PMI_SIZE", "1")  # as under mpiexec: not calibrated at construction
     fresh = cls(mesh, 1e5, 0.35, bonds=bonds)
-    del fresh.__dict__["micro"]  # as under mpiexec: not calibrated at construction
+    assert not fresh.is_calibrated
     one = distributed.micro_parameters(fresh, distributed.layout(mesh, 0, 1), lambda a: a)
     assert one.k_n == pytest.approx(model.k_n, rel=1e-12)
     assert one.nu_m == pytest.approx(model.nu_m, rel=1e-12)
@@ -103,7 +104,9 @@ def test_petsc_one_rank_matches_direct(case):
     m, sup, ld = mpi_worker.setup(problem, model, nonlinear)
     sol = dv.solve(m, sup, ld, solver="petsc", nonlinear=nonlinear, **mpi_worker.OPTIONS)
     ref = dv.solve(m, sup, ld, solver="direct", nonlinear=nonlinear, **mpi_worker.OPTIONS)
-    assert sol.info["solver"] == "petsc" and sol.info["converged"]
+    assert sol.info.solver == "petsc" and sol.info.converged
+    # one Newton for every engine: the same load steps in the same iterations
+    assert [st.iterations for st in sol.info.steps] == [st.iterations for st in ref.info.steps]
     assert np.max(np.abs(sol.u - ref.u)) <= 1e-8 * np.max(np.abs(ref.u))
     assert np.max(np.abs(sol.reactions - ref.reactions)) <= 1e-8 * np.max(np.abs(ref.reactions))
 
@@ -128,6 +131,7 @@ def test_petsc_two_ranks_match_direct(tmp_path):
         ref = dv.solve(m, sup, ld, solver="direct", nonlinear=nonlinear, **mpi_worker.OPTIONS)
         info = infos[str(i)]
         assert info["ranks"] == 2
+        assert info["step_iterations"] == [st.iterations for st in ref.info.steps]
         # the calibration summed over two ranks is the serial one
         assert info["k_n"] == pytest.approx(m.k_n, rel=1e-12)
         assert info["nu_m"] == pytest.approx(m.nu_m, rel=1e-12)
@@ -146,9 +150,9 @@ def test_petsc_refuses_best_effort_and_reports_stages():
         dv.solve(dv.DV(mesh, 1e5, 0.2), sup, ld, solver="petsc", best_effort=True)
     sol = dv.solve(dv.DV(mesh, 1e5, 0.2), sup, ld, solver="petsc")
     for stage in ("partition", "calibration", "assembly", "setup", "solve", "gather", "total"):
-        assert stage in sol.info["seconds"]
-    assert sol.info["parallel"]["ranks"] == 1
-    assert sol.info["iterations"] <= 30
+        assert stage in sol.info.seconds
+    assert sol.info.parallel.ranks == 1
+    assert sol.info.iterations <= 30
 
 
 @needs_petsc
@@ -184,3 +188,26 @@ def test_cli_run_on_two_ranks_writes_once(tmp_path):
     b = json.loads((tmp_path / "ser" / "uniaxial.json").read_text())
     assert a["solver"]["solver"] == "petsc"
     assert a["max_displacement"] == pytest.approx(b["max_displacement"], rel=1e-8)
+
+
+@needs_petsc
+def test_petsc_options_are_pushed_under_a_prefix_and_removed():
+    from petsc4py import PETSc
+
+    from dvstatic.parallel.petsc import DEFAULT_OPTIONS, PREFIX
+
+    opts = PETSc.Options()
+    opts.setValue(PREFIX + "pc_gamg_threshold", "0.05")  # the user's own setting wins
+    try:
+        mesh = dv.mesh.rectangle(1.0, 1.0, 0.1, kind="lattice")
+        sup = [dv.Fix("left", x=0.0), dv.Fix("bottom", y=0.0)]
+        sol = dv.solve(
+            dv.DV(mesh, 1e5, 0.2), sup, dv.Traction("right", (-1.0, 0.0)), solver="petsc"
+        )
+        assert sol.info.converged
+        for key in DEFAULT_OPTIONS:
+            if key != "pc_gamg_threshold":
+                assert not opts.hasName(PREFIX + key), key
+        assert opts.getString(PREFIX + "pc_gamg_threshold") == "0.05"
+    finally:
+        opts.delValue(PREFIX + "pc_gamg_threshold")

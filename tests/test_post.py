@@ -18,7 +18,7 @@ def test_virial_stress_of_uniaxial_solution(uniaxial_solution):
     s = virial_stress(sol.model, sol.u, linear=True)
     # exact for any lattice in equilibrium: A sigma = sum over nodes of F (x) x, with F
     # all external forces (loads and reactions)
-    from dvstatic.loads import load_vector
+    from dvstatic.problem import load_vector
 
     f = load_vector(sol.model.mesh, sol.loads).reshape(-1, 2) + sol.reactions
     expected = np.einsum("ni,nj->ij", f, sol.model.mesh.points) / sol.model.mesh.area
@@ -29,7 +29,7 @@ def test_virial_stress_of_uniaxial_solution(uniaxial_solution):
 def test_node_stress_area_average_is_virial(uniaxial_solution):
     sol = uniaxial_solution
     s = node_stress(sol.model, sol.u)
-    from dvstatic import geometry
+    from dvstatic.lattice import geometry
 
     g = geometry.of(sol.model.mesh)
     area = np.where(g.cell_area > 0.25 * g.dual_area, g.cell_area, g.dual_area)

@@ -11,4 +11,4 @@ def test_readme_python_blocks_run():
     assert blocks, "README has no python examples"
     namespace: dict = {}
     exec(compile("\n".join(blocks), str(README), "exec"), namespace)  # noqa: S102
-    assert namespace["sol"].info["converged"]
+    assert namespace["sol"].info.converged

@@ -1,3 +1,5 @@
+import inspect
+
 import numpy as np
 import pytest
 
@@ -25,9 +27,9 @@ def test_uniaxial_reactions_balance_the_load():
     # traction -1 over unit height: the left rollers push back with +1
     assert total[0] == pytest.approx(1.0, rel=1e-10)
     assert abs(total[1]) <= 1e-10
-    assert sol.info["converged"] and sol.info["residual"] < 1e-10
+    assert sol.info.converged and sol.info.residual < 1e-10
     for stage in ("geometry", "assembly", "setup", "solve", "total"):
-        assert stage in sol.info["seconds"]
+        assert stage in sol.info.seconds
 
 
 @pytest.mark.parametrize("cls", [dv.DV, dv.RV])
@@ -38,9 +40,9 @@ def test_direct_and_amg_agree(cls):
     a = dv.solve(model, sup, ld, solver="direct")
     b = dv.solve(model, sup, ld, solver="amg", rtol=1e-12)
     assert rel_l2(b.u, a.u) <= 1e-8
-    assert b.info["solver"] == "amg" and b.info["iterations"] > 0
-    assert b.info["residuals"][-1] <= 1e-11
-    assert "assembly" in b.info["reused"]  # second solve reuses the cached stiffness
+    assert b.info.solver == "amg" and b.info.iterations > 0
+    assert b.info.residuals[-1] <= 1e-11
+    assert "assembly" in b.info.reused  # second solve reuses the cached stiffness
 
 
 def test_amg_iterations_flat_from_1e4_to_1e5_nodes():
@@ -49,8 +51,8 @@ def test_amg_iterations_flat_from_1e4_to_1e5_nodes():
         m = dv.mesh.rectangle(1.0, 1.0, h, kind="jittered", seed=0)
         sup, ld = uniaxial_problem()
         sol = dv.solve(dv.DV(m, E_BEAM, NU), sup, ld, solver="amg", rtol=1e-8)
-        its.append(sol.info["iterations"])
-        assert sol.info["residual"] <= 1e-7
+        its.append(sol.info.iterations)
+        assert sol.info.residual <= 1e-7
     assert abs(its[1] - its[0]) <= 0.3 * its[0]
 
 
@@ -87,3 +89,53 @@ def test_solution_post_processing():
     work = -1.0 * np.mean(sol.u[sol.model.mesh.part_nodes("right"), 0])
     assert sol.energy() == pytest.approx(0.5 * work, rel=0.05)
     assert sol.tension().shape == (sol.model.mesh.n_bonds,)
+
+
+def test_info_is_typed_and_the_same_on_every_path():
+    m = dv.mesh.rectangle(1.0, 1.0, 0.1, kind="jittered", seed=0)
+    model = dv.DV(m, E_BEAM, 0.35)
+    sup, ld = uniaxial_problem()
+    runs = {
+        "direct": dv.solve(model, sup, ld, solver="direct"),
+        "amg": dv.solve(model, sup, ld, solver="amg"),
+        "dynamic-relaxation": dv.solve(model, sup, ld, solver="dynamic-relaxation", rtol=1e-6),
+        "newton": dv.solve(model, sup, ld, nonlinear=True, steps=2),
+    }
+    for name, sol in runs.items():
+        info = sol.info
+        assert type(info) is dv.SolveInfo, name
+        assert info.converged and info.n_dof == 2 * m.n_points, name
+        assert info.seconds.total >= info.seconds.solve >= 0.0, name
+        assert isinstance(info.stability, dv.solvers.StabilityCheck), name
+    assert runs["newton"].info.steps and not runs["direct"].info.steps
+    assert runs["direct"].info.stability.method == "ldl-inertia"
+    with pytest.warns(DeprecationWarning, match=r"use the attribute \.residual"):
+        assert runs["direct"].info["residual"] == runs["direct"].info.residual
+
+
+def test_options_are_listed_once_and_old_names_warn():
+    import dataclasses
+
+    from dvstatic import scene
+
+    names = {f.name for f in dataclasses.fields(dv.SolveOptions)}
+    assert (
+        set(inspect.signature(dv.solve).parameters)
+        == {
+            "model",
+            "supports",
+            "loads",
+            "options",
+        }
+        | names
+    )
+    assert set(scene.SOLVER_KEYS.values()) == names - {"progress"}
+    for name in names:
+        assert f"{name} :" in dv.solve.__doc__
+    m = dv.mesh.rectangle(1.0, 1.0, 0.25, kind="lattice")
+    sup, ld = uniaxial_problem()
+    with pytest.warns(DeprecationWarning, match="'max_iter' is deprecated; use 'newton_maxiter'"):
+        sol = dv.solve(dv.DV(m, E_BEAM, NU), sup, ld, nonlinear=True, max_iter=7)
+    assert sol.info.converged
+    with pytest.raises(TypeError, match="unknown solve option.*'tolerance'"):
+        dv.solve(dv.DV(m, E_BEAM, NU), sup, ld, tolerance=1e-3)

@@ -50,14 +50,14 @@ def measure(n_nodes: float, repeats: int = 2) -> list:
 
     import dvstatic as dv
     from dvstatic import linalg
-    from dvstatic.loads import constraints, load_vector
+    from dvstatic.problem import constraints, load_vector
 
     h = float(np.sqrt(2.0 / (np.sqrt(3) * n_nodes)))
     mesh = dv.mesh.rectangle(1.0, 1.0, h, kind="jittered", seed=0)
     model = dv.DV(mesh, 1e5, 0.2)
     dofs, vals = constraints(mesh, [dv.Fix("left", x=0.0), dv.Fix("bottom", y=0.0)])
     f = load_vector(mesh, [dv.Traction("right", (-1.0, 0.0))])
-    system = linalg.ConstrainedSystem(model._stiffness_bsr, dofs)
+    system = linalg.ConstrainedSystem(model.stiffness("bsr"), dofs)
     A, b = system.A, system.rhs(f, vals)
     B = linalg.rigid_modes(mesh.points)
     x = np.random.default_rng(0).random(A.shape[0])

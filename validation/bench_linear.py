@@ -36,8 +36,9 @@ def _peak_mb() -> float:
 
 def run_dv(n_nodes: float, direct_max: float, model_kind: str) -> dict:
     import dvstatic as dv
-    from dvstatic import assembly, geometry, linalg
-    from dvstatic.loads import constraints, load_vector
+    from dvstatic import linalg
+    from dvstatic.lattice import assembly, geometry
+    from dvstatic.problem import constraints, load_vector
 
     h = float(np.sqrt(2.0 / (np.sqrt(3) * n_nodes)))
     rec: dict = {"target_nodes": n_nodes, "h": h, "model": model_kind}
@@ -57,7 +58,7 @@ def run_dv(n_nodes: float, direct_max: float, model_kind: str) -> dict:
     assembly.pattern(mesh)
     rec["pattern_s"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    K = model._stiffness_bsr
+    K = model.stiffness("bsr")
     rec["assembly_s"] = time.perf_counter() - t0
     rec["nnz"] = int(K.nnz)
     rec["geometry_plus_assembly_s"] = (
@@ -82,7 +83,7 @@ def run_dv(n_nodes: float, direct_max: float, model_kind: str) -> dict:
     del amg
     if mesh.n_points <= direct_max:
         t0 = time.perf_counter()
-        from dvstatic.ordering import mesh_dof_order
+        from dvstatic.mesh import mesh_dof_order
 
         lu = linalg.DirectSolver(system.A, order=mesh_dof_order(mesh))
         xd, _ = lu.solve(b)

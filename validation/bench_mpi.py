@@ -66,12 +66,12 @@ def worker(n_nodes: float, check: bool) -> None:
         "dof": 2 * mesh.n_points,
         "mesh": t_mesh,
         "solve_total": t_solve,
-        "iterations": sol.info["iterations"],
-        "residual": sol.info["residual"],
-        "seconds": sol.info["seconds"],
+        "iterations": sol.info.iterations,
+        "residual": sol.info.residual,
+        "seconds": sol.info.seconds.as_dict(),
         "peak_MB_per_rank": peaks,
         "peak_MB_after_mesh_per_rank": mesh_peaks,
-        "rank0_memory": sol.info["parallel"]["memory"],
+        "rank0_memory": sol.info.parallel.memory,
     }
     if check:
         ref = dv.solve(dv.DV(mesh, 1e5, 0.2), sup, ld, solver="amg", rtol=1e-12)
@@ -119,7 +119,7 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     p = parser(__doc__)
     a = p.parse_args(argv)
-    from dvstatic import distributed
+    from dvstatic import parallel as distributed
 
     if not distributed.available():
         print("bench_mpi skipped: petsc4py is not installed (scripts/install_petsc.sh)")

@@ -30,9 +30,10 @@ STAGES = ("mesh", "geometry", "calibration", "assembly", "amg_setup", "amg_solve
 
 def run_one(n_nodes: float) -> dict:
     import dvstatic as dv
-    from dvstatic import assembly, geometry, linalg
-    from dvstatic.loads import constraints, load_vector
+    from dvstatic import linalg
+    from dvstatic.lattice import assembly, geometry
     from dvstatic.post import node_stress
+    from dvstatic.problem import constraints, load_vector
 
     rec: dict = {"target_nodes": n_nodes}
     h = float(np.sqrt(2.0 / (np.sqrt(3) * n_nodes)))
@@ -48,7 +49,7 @@ def run_one(n_nodes: float) -> dict:
     rec["calibration"] = time.perf_counter() - t
     t = time.perf_counter()
     assembly.pattern(mesh)
-    K = model._stiffness_bsr
+    K = model.stiffness("bsr")
     rec["assembly"] = time.perf_counter() - t
     dofs, vals = constraints(mesh, [dv.Fix("left", x=0.0), dv.Fix("bottom", y=0.0)])
     f = load_vector(mesh, [dv.Traction("right", (-1.0, 0.0))])

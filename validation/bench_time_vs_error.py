@@ -75,8 +75,8 @@ def run_size(
     ``METHODS``, ``models`` of ("DV", "RV")."""
     import dvstatic as dv
     from dvstatic import fem
-    from dvstatic.loads import constraints, load_vector
-    from dvstatic.relaxation import dynamic_relaxation
+    from dvstatic.problem import constraints, load_vector
+    from dvstatic.solvers.relaxation import dynamic_relaxation
 
     rows = []
     mesh, sup, ld = problem(name, n_nodes)
@@ -105,7 +105,7 @@ def run_size(
                     "method": f"{kind} {solver}",
                     "seconds": dt,
                     "error": e,
-                    "iterations": sol.info["iterations"],
+                    "iterations": sol.info.iterations,
                 }
             )
         for dr_kind in ("dynamic-relaxation", "dynamic-relaxation (bond forces)"):
@@ -119,7 +119,7 @@ def run_size(
             mesh_copy = dv.Mesh(mesh.points, mesh.triangles, parts=dict(mesh.parts))
             t0 = time.perf_counter()
             model = cls(mesh_copy, E_BEAM, NU_BEAM)
-            _ = model._stiffness_bsr  # assembly counts for the explicit scheme too
+            _ = model.stiffness("bsr")  # assembly counts for the explicit scheme too
             dofs, vals = constraints(mesh_copy, sup)
             f = load_vector(mesh_copy, ld)
             t_setup = time.perf_counter() - t0
@@ -140,9 +140,9 @@ def run_size(
                     time_limit=dr_time_limit,
                     nonlinear="bond" in dr_kind,
                 )
-                steps_total, dr_seconds = dinfo["iterations"], dinfo["seconds"]
+                steps_total, dr_seconds = dinfo.iterations, dinfo.seconds
             except dv.SolverError as exc:
-                steps_total = exc.info.get("iterations", 0)
+                steps_total = getattr(exc.info, "iterations", 0) if exc.info else 0
                 dr_seconds = dr_time_limit
             per_step = dr_seconds / max(steps_total, 1)
             hit = next((s for s, e in trace if abs(e - impl_err) <= 0.01 * impl_err), None)

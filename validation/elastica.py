@@ -116,8 +116,8 @@ def run(rows_list, models=("DV", "RV"), alphas=ALPHAS) -> dict:
                     "h_over_v_lattice": hz / v,
                     "h_over_v_elastica": eh / ev,
                     "linear_stiffness_error": (a / 3.0) / (v_lin / LENGTH) - 1.0,
-                    "newton_steps": len(sol.info["steps"]),
-                    "newton_iterations": sol.info["iterations"],
+                    "newton_steps": len(sol.info.steps),
+                    "newton_iterations": sol.info.iterations,
                     "seconds": time.perf_counter() - t0,
                 }
                 # the lattice behaves as an elastica with its own bending stiffness

@@ -34,8 +34,8 @@ def _cond_and_solve(model, sup, ld, solver="direct"):
 
     import dvstatic as dv
     from dvstatic import linalg
-    from dvstatic.loads import constraints
-    from dvstatic.ordering import mesh_dof_order
+    from dvstatic.mesh import mesh_dof_order
+    from dvstatic.problem import constraints
 
     rec = {}
     try:
@@ -48,13 +48,13 @@ def _cond_and_solve(model, sup, ld, solver="direct"):
     exact = np.c_[-x[:, 0] / E_BEAM, model.nu * x[:, 1] / E_BEAM]
     rec.update(
         status="solved",
-        residual=sol.info["residual"],
+        residual=sol.info.residual,
         backward_error=sol.info.get("backward_error"),
         error=float(np.linalg.norm(sol.u - exact) / np.linalg.norm(exact)),
     )
     if solver == "direct":
         dofs, _ = constraints(mesh, sup)
-        A = linalg.ConstrainedSystem(model._stiffness_bsr, dofs).A.tocsc()
+        A = linalg.ConstrainedSystem(model.stiffness("bsr"), dofs).A.tocsc()
         lu = linalg.DirectSolver(A, order=mesh_dof_order(mesh))
         inv = spla.LinearOperator(
             A.shape, matvec=lambda v: lu.solve(v)[0], rmatvec=lambda v: lu.solve(v)[0], dtype=float
@@ -114,7 +114,7 @@ def slivers(bumps) -> list:
             rec = {"case": "boundary sliver", "bump": bump, "model": name}
             try:
                 mesh = dv.Mesh(pts, tri, parts=parts)
-                from dvstatic import geometry
+                from dvstatic.lattice import geometry
 
                 g = geometry.of(mesh)
                 rec["max_half_side_over_l"] = float(np.max(np.abs(g.tri_r) / g.tri_l))

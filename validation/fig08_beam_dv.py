@@ -43,8 +43,8 @@ def main(argv: list[str] | None = None) -> int:
         "midspan_uy": float(mid[1]),
         "k_n": sol.model.k_n,
         "nu_m": sol.model.nu_m,
-        "solver": sol.info["solver"],
-        "seconds": sol.info["seconds"]["total"],
+        "solver": sol.info.solver,
+        "seconds": sol.info.seconds.total,
     }
     write_json(data, a.out / "fig08.json")
     plot.save(fig, a.out / "fig08.png")

@@ -30,7 +30,7 @@ AMPLITUDES = (0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.45)
 
 def _errors(mesh, models, calibration, rev_points, sup, ld) -> dict:
     import dvstatic as dv
-    from dvstatic import calibration as cal
+    from dvstatic.lattice import calibration as cal
 
     exact = uniaxial_exact(mesh.points)
     out = {}

@@ -38,7 +38,7 @@ def make_mesh(name: str, h: float):
 
 def run(h: float, nus, meshes, rev_points: int) -> dict:
     import dvstatic as dv
-    from dvstatic import calibration
+    from dvstatic.lattice import calibration
 
     sup, ld = uniaxial_problem()
     cases = []
@@ -83,9 +83,9 @@ def run(h: float, nus, meshes, rev_points: int) -> dict:
                         rec.update(
                             status="solved",
                             error=rel_l2(sol.u, exact),
-                            residual=sol.info["residual"],
+                            residual=sol.info.residual,
                         )
-                        assert sol.info["residual"] <= 1e-10
+                        assert sol.info.residual <= 1e-10
                     cases.append(rec)
     return {
         "h": h,

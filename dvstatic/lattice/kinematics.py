@@ -16,35 +16,20 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["circumcentres", "barycentric", "edge_frames", "half_sides"]
+from .._planar import circumcentres, cross, perp, rot
+
+__all__ = [
+    "O_OF",
+    "A_OF",
+    "circumcentres",
+    "barycentric",
+    "edge_frames",
+    "half_sides",
+    "elongation_gradients",
+]
 
 O_OF = np.array([1, 2, 0])  # local start vertex of edge k
 A_OF = np.array([2, 0, 1])  # local end vertex of edge k
-
-
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-
-
-def _rot(v: np.ndarray) -> np.ndarray:
-    """Clockwise quarter turn (vy, -vx)."""
-    return np.stack([v[..., 1], -v[..., 0]], axis=-1)
-
-
-def _perp(v: np.ndarray) -> np.ndarray:
-    """Counter-clockwise quarter turn (-vy, vx)."""
-    return np.stack([-v[..., 1], v[..., 0]], axis=-1)
-
-
-def circumcentres(Y: np.ndarray) -> np.ndarray:
-    """Circumcentres of triangles, shape (M, 2), for vertices Y of shape (M, 3, 2)."""
-    a = Y[:, 1] - Y[:, 0]
-    b = Y[:, 2] - Y[:, 0]
-    D = 2.0 * _cross(a, b)
-    p = np.einsum("mi,mi->m", a, a)[:, None] * _rot(b) - np.einsum("mi,mi->m", b, b)[
-        :, None
-    ] * _rot(a)
-    return Y[:, 0] + p / D[:, None]
 
 
 def barycentric(Y: np.ndarray, P: np.ndarray) -> np.ndarray:
@@ -52,9 +37,9 @@ def barycentric(Y: np.ndarray, P: np.ndarray) -> np.ndarray:
     a = Y[:, 1] - Y[:, 0]
     b = Y[:, 2] - Y[:, 0]
     q = P - Y[:, 0]
-    det = _cross(a, b)
-    l1 = _cross(q, b) / det
-    l2 = _cross(a, q) / det
+    det = cross(a, b)
+    l1 = cross(q, b) / det
+    l2 = cross(a, q) / det
     return np.stack([1.0 - l1 - l2, l1, l2], axis=1)
 
 
@@ -81,18 +66,18 @@ def _circumcentre_jacobian_T(Y: np.ndarray, t: np.ndarray) -> np.ndarray:
     """
     a = Y[:, 1] - Y[:, 0]
     b = Y[:, 2] - Y[:, 0]
-    D = 2.0 * _cross(a, b)
+    D = 2.0 * cross(a, b)
     aa = np.einsum("mi,mi->m", a, a)
     bb = np.einsum("mi,mi->m", b, b)
-    p = (aa[:, None] * _rot(b) - bb[:, None] * _rot(a)) / D[:, None]
-    rb, ra = _rot(b), _rot(a)
+    p = (aa[:, None] * rot(b) - bb[:, None] * rot(a)) / D[:, None]
+    rb, ra = rot(b), rot(a)
     # dp/da = (2 rot(b) a^T - |b|^2 R - 2 p rot(b)^T) / D ; R = [[0, 1], [-1, 0]]
     # dp/db = (|a|^2 R - 2 rot(a) b^T + 2 p rot(a)^T) / D
     # (J^T t) = J^T applied to t: (u v^T)^T t = v (u . t);  R^T t = -rot(t)... R^T = -R
     rb_t = np.einsum("mi,mki->mk", rb, t)
     ra_t = np.einsum("mi,mki->mk", ra, t)
     p_t = np.einsum("mi,mki->mk", p, t)
-    RTt = -_rot(t)  # R^T t
+    RTt = -rot(t)  # R^T t
     Da = D[:, None, None]
     ja = (
         2.0 * rb_t[..., None] * a[:, None, :]
@@ -137,13 +122,13 @@ def half_sides(
     w = np.empty_like(d)
     for k in range(3):
         np.subtract(H, Y[:, O_OF[k]], out=w[:, k])
-    g = _cross(d, w)
+    g = cross(d, w)
     r = g / length
     if not grad:
         return r, None
     inv_l = 1.0 / length
-    t = _perp(d) * inv_l[..., None]  # current unit normal, dr/dw
-    dd = _rot(w) * inv_l[..., None] - (g * inv_l**3)[..., None] * d  # dr/dd
+    t = perp(d) * inv_l[..., None]  # current unit normal, dr/dw
+    dd = rot(w) * inv_l[..., None] - (g * inv_l**3)[..., None] * d  # dr/dd
     if bary is None:
         jt = _circumcentre_jacobian_T(Y, t)  # (M, 3, 3, 2)
     else:
@@ -154,11 +139,12 @@ def half_sides(
     return r, jt.reshape(len(Y), 3, 6)
 
 
-def bond_vectors6(n: np.ndarray) -> np.ndarray:
-    """Elongation gradients b (M, 3, 6): -n at O and +n at A for each local edge."""
+def elongation_gradients(n: np.ndarray) -> np.ndarray:
+    """Elongation gradients b (M, 3, 6) of the three local edges: ``-n`` at O, ``+n`` at A
+    (interleaved x, y per local vertex), for unit edge directions ``n`` (M, 3, 2)."""
     m = n.shape[0]
     b = np.zeros((m, 3, 3, 2))
-    k = np.arange(3)
-    b[:, k, O_OF] = -n
-    b[:, k, A_OF] = n
+    for k in range(3):
+        b[:, k, O_OF[k]] = -n[:, k]
+        b[:, k, A_OF[k]] = n[:, k]
     return b.reshape(m, 3, 6)

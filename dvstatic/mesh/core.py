@@ -1,4 +1,4 @@
-"""Triangle meshes: the :class:`Mesh` container, generators and perturbation.
+"""The :class:`Mesh` container: validated triangles, bonds, named boundary parts.
 
 A mesh is a set of particles (``points``) and counter-clockwise ``triangles``; its
 edges are the bonds of the lattice. Bounded meshes carry named boundary ``parts``
@@ -16,58 +16,16 @@ from functools import cached_property
 
 import numpy as np
 
-from ._checks import check_positive, check_seed
+from .._checks import check_positive, check_seed
+from .._planar import cross
+from ..errors import InputError
 from .domain import Domain
+from .sampling import move_in_domain, periodic_delaunay, unit_disc
+from .topology import Topology, build_topology
 
 log = logging.getLogger(__name__)
 
-__all__ = [
-    "Mesh",
-    "Topology",
-    "rectangle",
-    "polygon",
-    "disc",
-    "generate",
-    "periodic_square",
-    "with_spread",
-    "lloyd",
-    "KINDS",
-]
-
-
-@dataclass(frozen=True, eq=False)
-class Topology:
-    """Edge structure of a triangulation (computed once per mesh).
-
-    Attributes
-    ----------
-    bonds : ndarray, shape (E, 2), int64
-        End nodes (O, A) of every bond (mesh edge), O < A for bounded meshes.
-    bond_image : ndarray, shape (E, 2), int64
-        Periodic image of A relative to O (zeros for bounded meshes); the bond
-        vector is ``points[A] + bond_image * period - points[O]``.
-    tri_bonds : ndarray, shape (M, 3), int64
-        Bond index of local edge k of each triangle; local edge k joins local
-        vertices k+1 and k+2 (mod 3) and is opposite vertex k.
-    bond_tris : ndarray, shape (E, 2), int64
-        The one or two triangles of each bond; -1 where a bond has one triangle.
-    bond_local : ndarray, shape (E, 2), int64
-        Local edge index of the bond in each of ``bond_tris`` (-1 where absent).
-    boundary_edges : ndarray, shape (m, 2), int64
-        Boundary edges oriented counter-clockwise around the domain.
-    """
-
-    bonds: np.ndarray
-    bond_image: np.ndarray
-    tri_bonds: np.ndarray
-    bond_tris: np.ndarray
-    bond_local: np.ndarray
-    boundary_edges: np.ndarray
-
-    @property
-    def n_tris_per_bond(self) -> np.ndarray:
-        """Number of triangles (1 or 2) of every bond, shape (E,)."""
-        return 1 + (self.bond_tris[:, 1] >= 0)
+__all__ = ["Mesh"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -93,7 +51,7 @@ class Mesh:
 
     Raises
     ------
-    ValueError
+    InputError (a ValueError)
         Non-finite coordinates, duplicate points, indices out of range, zero-area
         triangles, unused points, edges shared by more than two triangles or
         overlapping triangles, unknown or non-boundary part edges.
@@ -114,25 +72,29 @@ class Mesh:
         t = _as_triangles(self.triangles, len(p))
         period, images = None, None
         if (self.period is None) != (self.images is None):
-            raise ValueError("a periodic mesh needs both `period` and `images`")
+            raise InputError("a periodic mesh needs both `period` and `images`", "period")
         if self.period is not None:
             period = np.asarray(self.period, dtype=float).reshape(-1)
             if period.shape != (2,) or not np.all(np.isfinite(period)) or np.any(period <= 0):
-                raise ValueError(f"period must be two positive finite lengths, got {self.period!r}")
+                raise InputError(
+                    f"period must be two positive finite lengths, got {self.period!r}", "period"
+                )
             images = np.asarray(self.images)
             if images.shape != t.shape + (2,):
-                raise ValueError(f"images must have shape {t.shape + (2,)}, got {images.shape}")
+                raise InputError(
+                    f"images must have shape {t.shape + (2,)}, got {images.shape}", "images"
+                )
             if not np.issubdtype(images.dtype, np.integer):
                 raise TypeError(f"images must be integers, got dtype {images.dtype}")
             images = images.astype(np.int64)
             if np.any(np.abs(images) > 1):
-                raise ValueError("periodic images must be -1, 0 or 1")
+                raise InputError("periodic images must be -1, 0 or 1", "images")
             if np.any(p < 0) or np.any(p >= period):
-                raise ValueError("points of a periodic mesh must lie in [0, period)")
+                raise InputError("points of a periodic mesh must lie in [0, period)", "points")
         x = p[t]
         if images is not None:
             x = x + images * period
-        a2 = _cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])
+        a2 = cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])
         flip = a2 < 0
         if flip.any():
             t[flip] = t[flip][:, [0, 2, 1]]
@@ -145,20 +107,22 @@ class Mesh:
         degenerate = a2 <= 64 * np.finfo(float).eps * lmax2
         if degenerate.any():
             i = int(np.flatnonzero(degenerate)[0])
-            raise ValueError(
+            raise InputError(
                 f"{int(degenerate.sum())} triangle(s) have zero area (first: triangle {i} with "
-                f"vertices {t[i].tolist()}); every triangle needs three non-collinear points"
+                f"vertices {t[i].tolist()}); every triangle needs three non-collinear points",
+                "triangles",
             )
         if images is None and np.any(
             (t[:, 0] == t[:, 1]) | (t[:, 1] == t[:, 2]) | (t[:, 0] == t[:, 2])
         ):
-            raise ValueError("a triangle repeats a vertex index")
+            raise InputError("a triangle repeats a vertex index", "triangles")
         used = np.bincount(t.ravel(), minlength=len(p))
         if np.any(used == 0):
             bad = np.flatnonzero(used == 0)
-            raise ValueError(
+            raise InputError(
                 f"{bad.size} point(s) are not used by any triangle (first: point {bad[0]}); "
-                "remove them or add triangles"
+                "remove them or add triangles",
+                "points",
             )
         for arr in (p, t) + ((period, images) if images is not None else ()):
             arr.setflags(write=False)
@@ -185,7 +149,7 @@ class Mesh:
 
     @property
     def n_bonds(self) -> int:
-        """Number of bonds (mesh edges) E."""
+        """Number of bonds (mesh edges)."""
         return len(self.topology.bonds)
 
     @property
@@ -196,7 +160,7 @@ class Mesh:
     @cached_property
     def topology(self) -> Topology:
         """Bonds and their triangles (:class:`Topology`), computed once."""
-        return _topology(self.triangles, self.n_points, self.images)
+        return build_topology(self.triangles, self.n_points, self.images)
 
     def triangle_coordinates(self) -> np.ndarray:
         """Vertex coordinates of every triangle, unwrapped for periodic meshes, (M, 3, 2)."""
@@ -209,7 +173,7 @@ class Mesh:
     def triangle_areas(self) -> np.ndarray:
         """Triangle areas, shape (M,)."""
         x = self.triangle_coordinates()
-        a = 0.5 * _cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])
+        a = 0.5 * cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])
         a.setflags(write=False)
         return a
 
@@ -229,7 +193,7 @@ class Mesh:
         return np.unique(self.boundary_edges)
 
     def bond_vectors(self) -> np.ndarray:
-        """Reference bond vectors A - O, shape (E, 2)."""
+        """Reference bond vectors A - O, shape (n_bonds, 2)."""
         b = self.topology.bonds
         d = self.points[b[:, 1]] - self.points[b[:, 0]]
         if self.period is not None:
@@ -237,7 +201,7 @@ class Mesh:
         return d
 
     def bond_lengths(self) -> np.ndarray:
-        """Reference bond lengths, shape (E,)."""
+        """Reference bond lengths, shape (n_bonds,)."""
         d = self.bond_vectors()
         return np.hypot(d[:, 0], d[:, 1])
 
@@ -257,14 +221,14 @@ class Mesh:
 
         Raises
         ------
-        ValueError
+        InputError
             If the mesh has no part of that name (the message lists the names).
         """
         if not isinstance(name, str):
             raise TypeError(f"part name must be a string, got {type(name).__name__}")
         if name not in self.parts:
             known = ", ".join(repr(k) for k in self.parts) or "none (this mesh has no named parts)"
-            raise ValueError(f"unknown boundary part {name!r}; known parts: {known}")
+            raise InputError(f"unknown boundary part {name!r}; known parts: {known}", "where")
         return self.parts[name]
 
     def part_nodes(self, name: str) -> np.ndarray:
@@ -276,7 +240,7 @@ class Mesh:
         if not self.parts:
             return out
         if self.is_periodic:
-            raise ValueError("periodic meshes have no boundary, so they cannot have parts")
+            raise InputError("periodic meshes have no boundary, so they cannot have parts", "parts")
         be = topo.boundary_edges
         n = self.n_points
         fwd = be[:, 0] * n + be[:, 1]
@@ -287,10 +251,10 @@ class Mesh:
             if e.size == 0:
                 e = np.zeros((0, 2), np.int64)
             if e.ndim != 2 or e.shape[1] != 2 or not np.issubdtype(e.dtype, np.integer):
-                raise ValueError(f"part {name!r} must be an (m, 2) integer array of edges")
+                raise InputError(f"part {name!r} must be an (m, 2) integer array of edges", "parts")
             e = e.astype(np.int64)
             if np.any(e < 0) or np.any(e >= n):
-                raise ValueError(f"part {name!r} has node indices outside [0, {n})")
+                raise InputError(f"part {name!r} has node indices outside [0, {n})", "parts")
             k1 = e[:, 0] * n + e[:, 1]
             k2 = e[:, 1] * n + e[:, 0]
             i1 = np.minimum(np.searchsorted(fwd_sorted, k1), len(fwd_sorted) - 1)
@@ -299,8 +263,8 @@ class Mesh:
             ok2 = fwd_sorted[i2] == k2 if len(fwd_sorted) else np.zeros(len(e), bool)
             if not np.all(ok1 | ok2):
                 bad = e[~(ok1 | ok2)][0]
-                raise ValueError(
-                    f"part {name!r} contains {bad.tolist()}, which is not a boundary edge"
+                raise InputError(
+                    f"part {name!r} contains {bad.tolist()}, which is not a boundary edge", "parts"
                 )
             ccw = np.where(ok1[:, None], e, e[:, ::-1])
             ccw.setflags(write=False)
@@ -328,32 +292,30 @@ class Mesh:
         -------
         Mesh
         """
-        from .meshgen import _disc, _move_in_domain
-        from .periodic import periodic_delaunay
-
         amplitude = check_positive("amplitude", amplitude, allow_zero=True)
         rng = np.random.default_rng(check_seed(seed))
         p = np.array(self.points)
         if amplitude == 0:
             return self
         if self.is_periodic:
-            p = np.mod(p + _disc(rng, len(p)) * amplitude, self.period)
+            p = np.mod(p + unit_disc(rng, len(p)) * amplitude, self.period)
             p[p >= self.period] = 0.0
             tri, images = periodic_delaunay(p, self.period)
             return Mesh(p, tri, period=self.period, images=images)
         if self.domain is None:
             bnd = self.boundary_nodes
             inner = np.setdiff1d(np.arange(self.n_points), bnd)
-            p[inner] += _disc(rng, inner.size) * amplitude
+            p[inner] += unit_disc(rng, inner.size) * amplitude
             try:
                 return Mesh(p, self.triangles, parts=dict(self.parts))
-            except ValueError as exc:
-                raise ValueError(
+            except InputError as exc:
+                raise InputError(
                     f"perturbation of amplitude {amplitude} inverts triangles of this mesh "
-                    f"({exc}); use a smaller amplitude"
+                    f"({exc}); use a smaller amplitude",
+                    "amplitude",
                 ) from None
         tol = 1e-9 * self.h
-        p = _move_in_domain(self.domain, p, amplitude, rng, tol)
+        p = move_in_domain(self.domain, p, amplitude, rng, tol)
         p, tri, parts = self.domain.triangulate(p, tol)
         return Mesh(p, tri, parts=parts, domain=self.domain)
 
@@ -370,26 +332,30 @@ def _as_points(points) -> np.ndarray:
     except (TypeError, ValueError):
         raise TypeError("points must be a numeric array of shape (N, 2)") from None
     if p.ndim != 2 or p.shape[1] != 2:
-        raise ValueError(f"points must have shape (N, 2), got {p.shape}")
+        raise InputError(f"points must have shape (N, 2), got {p.shape}", "points")
     if len(p) < 3:
-        raise ValueError(f"a mesh needs at least 3 points, got {len(p)}")
+        raise InputError(f"a mesh needs at least 3 points, got {len(p)}", "points")
     if not np.all(np.isfinite(p)):
         bad = np.flatnonzero(~np.all(np.isfinite(p), axis=1))
-        raise ValueError(f"{bad.size} point(s) have non-finite coordinates (first: point {bad[0]})")
+        raise InputError(
+            f"{bad.size} point(s) have non-finite coordinates (first: point {bad[0]})", "points"
+        )
     return p
 
 
 def _as_triangles(triangles, n: int) -> np.ndarray:
     t = np.array(triangles)
     if t.ndim != 2 or t.shape[1] != 3:
-        raise ValueError(f"triangles must have shape (M, 3), got {t.shape}")
+        raise InputError(f"triangles must have shape (M, 3), got {t.shape}", "triangles")
     if len(t) == 0:
-        raise ValueError("a mesh needs at least one triangle")
+        raise InputError("a mesh needs at least one triangle", "triangles")
     if not np.issubdtype(t.dtype, np.integer):
         raise TypeError(f"triangles must be integer indices, got dtype {t.dtype}")
     t = t.astype(np.int64)
     if t.min() < 0 or t.max() >= n:
-        raise ValueError(f"triangle indices must be in [0, {n}), got range [{t.min()}, {t.max()}]")
+        raise InputError(
+            f"triangle indices must be in [0, {n}), got range [{t.min()}, {t.max()}]", "triangles"
+        )
     return t
 
 
@@ -400,85 +366,7 @@ def _check_duplicates(p: np.ndarray) -> None:
     if same.any():
         k = int(np.flatnonzero(same)[0])
         i, j = sorted((int(order[k]), int(order[k + 1])))
-        raise ValueError(
-            f"{int(same.sum())} duplicate point(s) (first: points {i} and {j} at {p[i].tolist()})"
+        raise InputError(
+            f"{int(same.sum())} duplicate point(s) (first: points {i} and {j} at {p[i].tolist()})",
+            "points",
         )
-
-
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-
-
-def _topology(tri: np.ndarray, n: int, images: np.ndarray | None) -> Topology:
-    """Bonds, triangle-bond incidence and boundary of a (periodic) triangulation."""
-    m = len(tri)
-    o = tri[:, [1, 2, 0]]
-    a = tri[:, [2, 0, 1]]
-    lo, hi = np.minimum(o, a), np.maximum(o, a)
-    key = lo * n + hi
-    if images is not None:
-        s = images[:, [2, 0, 1]] - images[:, [1, 2, 0]]  # image of a relative to o
-        s = np.where((o > a)[..., None], -s, s)
-        if np.any(np.abs(s) > 1):
-            raise ValueError("periodic triangle spans more than one period")
-        if np.any(o == a):
-            raise ValueError(
-                "a periodic triangle joins a point to its own image: too few points for a "
-                "periodic mesh"
-            )
-        key = key * 9 + (s[..., 0] + 1) * 3 + (s[..., 1] + 1)
-    uniq, inv, cnt = np.unique(key.ravel(), return_inverse=True, return_counts=True)
-    if cnt.max() > 2:
-        e = int(np.argmax(cnt))
-        raise ValueError(
-            f"{int(np.sum(cnt > 2))} edge(s) are shared by more than two triangles "
-            f"(first shared by {int(cnt[e])}); the triangles overlap"
-        )
-    sign = np.where(o < a, 1, -1).ravel()
-    balance = np.bincount(inv, weights=sign, minlength=len(uniq))
-    if np.any((cnt == 2) & (balance != 0)):
-        raise ValueError("two triangles share an edge with the same orientation: they overlap")
-    if images is not None and np.any(cnt != 2):
-        raise ValueError("a periodic triangulation must have every edge in exactly two triangles")
-    order = np.argsort(inv, kind="stable")
-    start = np.concatenate([[0], np.cumsum(cnt)[:-1]])
-    first = order[start]
-    second = np.where(cnt == 2, order[np.minimum(start + 1, len(order) - 1)], -1)
-    bond_tris = np.stack([first // 3, np.where(second >= 0, second // 3, -1)], axis=1)
-    bond_local = np.stack([first % 3, np.where(second >= 0, second % 3, -1)], axis=1)
-    tri_bonds = inv.reshape(m, 3).astype(np.int64)
-    if images is None:
-        bonds = np.stack([uniq // n, uniq % n], axis=1)
-        bond_image = np.zeros_like(bonds)
-    else:
-        pair = uniq // 9
-        code = uniq % 9
-        bonds = np.stack([pair // n, pair % n], axis=1)
-        bond_image = np.stack([code // 3 - 1, code % 3 - 1], axis=1)
-    ob, ab = o.ravel(), a.ravel()
-    bmask = np.flatnonzero(cnt[inv] == 1)
-    boundary = np.stack([ob[bmask], ab[bmask]], axis=1)
-    out = Topology(
-        bonds=bonds.astype(np.int64),
-        bond_image=bond_image.astype(np.int64),
-        tri_bonds=tri_bonds,
-        bond_tris=bond_tris.astype(np.int64),
-        bond_local=bond_local.astype(np.int64),
-        boundary_edges=boundary.astype(np.int64),
-    )
-    for arr in vars(out).values():
-        arr.setflags(write=False)
-    return out
-
-
-# generators live in meshgen.py; re-exported here as dvstatic.mesh.rectangle etc.
-from .meshgen import (  # noqa: E402
-    KINDS,
-    disc,
-    generate,
-    lloyd,
-    polygon,
-    rectangle,
-    with_spread,
-)
-from .periodic import periodic_square  # noqa: E402

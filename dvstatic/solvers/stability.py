@@ -12,21 +12,23 @@ from __future__ import annotations
 import logging
 import time
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-from . import calibration
-from .loads import constraints
-from .models import VoronoiModel
-
-if TYPE_CHECKING:  # annotations only: scipy is imported where it is used
-    pass
-
+from ..lattice import LatticeOperator, VoronoiModel, calibration
+from ..lattice.stress import check_model
+from ..problem import constraints
 
 log = logging.getLogger(__name__)
 
-__all__ = ["StabilityReport", "stability", "DENSE_MAX_DOF", "CHECK_MAX_DOF"]
+__all__ = [
+    "StabilityReport",
+    "stability",
+    "stiffness_parts",
+    "nu_of_nu_m",
+    "DENSE_MAX_DOF",
+    "CHECK_MAX_DOF",
+]
 
 #: free dofs up to which the generalised eigenvalues are computed densely
 DENSE_MAX_DOF = 2500
@@ -81,15 +83,12 @@ class StabilityReport:
         )
 
 
-def _parts(model: VoronoiModel):
+def stiffness_parts(model: VoronoiModel):
     """K0 (springs, k_n = 1) and K1 (coupling per unit nu_m) as CSR matrices."""
-    micro0 = calibration.MicroParameters(1.0, 0.0, "probe")
-    micro1 = calibration.MicroParameters(1.0, 1.0, "probe")
-    cls = type(model)
-    k0 = cls(model.mesh, model.E, model.nu, calibration=micro0, bonds=model.bonds)
-    k1 = cls(model.mesh, model.E, model.nu, calibration=micro1, bonds=model.bonds)
-    K0 = k0._stiffness_bsr.tocsr()
-    return K0, k1._stiffness_bsr.tocsr() - K0
+    bary = model.barycentric_images
+    K0 = LatticeOperator(model.mesh, model.bond_weight, 0.0, bary).stiffness_bsr.tocsr()
+    K1 = LatticeOperator(model.mesh, model.bond_weight, 1.0, bary).stiffness_bsr.tocsr()
+    return K0, K1 - K0
 
 
 def _free_dofs(model: VoronoiModel, supports) -> np.ndarray:
@@ -116,8 +115,9 @@ def nu_of_nu_m(model: VoronoiModel, nu_m: float) -> float:
         den = nu_m * m.m1 + 3 * m.alpha
         return float((m.alpha + nu_m * m.m2) / den) if den != 0 else float("inf")
     if micro.calibration == "relaxed":
+        # the very sample the calibration used (cached by spread, size asked for, seed)
         rev = calibration.rev_for_spread(
-            micro.details["sigma_L_mesh"], micro.details["sample_points"]
+            micro.details["sigma_L_mesh"], *micro.details["sample_request"]
         )
         r = calibration.relaxed_moduli(model.kind, rev, nu_m, model.bonds)
         # at the mesh's stability limit the sample may itself be unstable: no value
@@ -145,41 +145,61 @@ def stability(model: VoronoiModel, supports=None) -> StabilityReport:
     runs (largest and smallest algebraic) with one sparse factorisation of ``K0``,
     plus one shift-invert run for the smallest eigenvalue of ``K``.
     """
-    import scipy.linalg
-    import scipy.sparse as sp
-    import scipy.sparse.linalg as spla
-
-    if not isinstance(model, VoronoiModel):
-        raise TypeError(f"model must be a dvstatic DV or RV model, got {type(model).__name__}")
+    check_model(model)
     t0 = time.perf_counter()
-    K0, K1 = _parts(model)
+    K0, K1 = stiffness_parts(model)
     free = _free_dofs(model, supports)
     A = K1[free][:, free]
     B = K0[free][:, free]
     A = 0.5 * (A + A.T)
     K = model.k_n * (B + model.nu_m * A)
-    if len(free) <= DENSE_MAX_DOF:
-        lam = scipy.linalg.eigh(A.toarray(), B.toarray(), eigvals_only=True)
-        lam_min, lam_max = float(lam[0]), float(lam[-1])
-        ev = np.linalg.eigvalsh(K.toarray())
-        min_eig = float(ev[np.argmin(np.abs(ev))]) if np.all(ev > 0) else float(ev[0])
-        method = "dense"
-    else:
-        Binv = spla.splu(sp.csc_matrix(B), permc_spec="MMD_AT_PLUS_A")
-        Minv = spla.LinearOperator(B.shape, matvec=Binv.solve, dtype=float)
-        opts = dict(k=1, M=B, Minv=Minv, tol=1e-6, maxiter=20 * len(free))
-        lam_max = float(spla.eigsh(A, which="LA", return_eigenvectors=False, **opts)[0])
-        lam_min = float(spla.eigsh(A, which="SA", return_eigenvectors=False, **opts)[0])
-        try:
-            min_eig = float(spla.eigsh(K, k=1, sigma=0.0, which="LM", return_eigenvectors=False)[0])
-        except (RuntimeError, spla.ArpackNoConvergence):
-            min_eig = float("nan")
-        method = "arpack"
+    lam_min, lam_max, min_eig, method = _extreme_eigenvalues(A, B, K)
     hi = -1.0 / lam_min if lam_min < 0 else np.inf
     lo = -1.0 / lam_max if lam_max > 0 else -np.inf
     nu_m = model.nu_m
-    margin = float(min(1 + nu_m * lam_min, 1 + nu_m * lam_max))
-    stable = bool(lo < nu_m < hi)
+    rep = StabilityReport(
+        lam_min,
+        lam_max,
+        (float(lo), float(hi)),
+        _nu_interval(model, lo, hi),
+        float(nu_m),
+        bool(lo < nu_m < hi),
+        float(min(1 + nu_m * lam_min, 1 + nu_m * lam_max)),
+        min_eig,
+        time.perf_counter() - t0,
+        method,
+    )
+    log.info("stability: %s", rep)
+    return rep
+
+
+def _extreme_eigenvalues(A, B, K) -> tuple[float, float, float, str]:
+    """Extreme generalised eigenvalues of ``A v = lambda B v`` and the eigenvalue of
+    ``K`` nearest to zero (dense for small systems, ARPACK above)."""
+    import scipy.linalg
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as spla
+
+    n = A.shape[0]
+    if n <= DENSE_MAX_DOF:
+        lam = scipy.linalg.eigh(A.toarray(), B.toarray(), eigvals_only=True)
+        ev = np.linalg.eigvalsh(K.toarray())
+        min_eig = float(ev[np.argmin(np.abs(ev))]) if np.all(ev > 0) else float(ev[0])
+        return float(lam[0]), float(lam[-1]), min_eig, "dense"
+    Binv = spla.splu(sp.csc_matrix(B), permc_spec="MMD_AT_PLUS_A")
+    Minv = spla.LinearOperator(B.shape, matvec=Binv.solve, dtype=float)
+    opts = dict(k=1, M=B, Minv=Minv, tol=1e-6, maxiter=20 * n)
+    lam_max = float(spla.eigsh(A, which="LA", return_eigenvectors=False, **opts)[0])
+    lam_min = float(spla.eigsh(A, which="SA", return_eigenvectors=False, **opts)[0])
+    try:
+        min_eig = float(spla.eigsh(K, k=1, sigma=0.0, which="LM", return_eigenvectors=False)[0])
+    except (RuntimeError, spla.ArpackNoConvergence):
+        min_eig = float("nan")
+    return lam_min, lam_max, min_eig, "arpack"
+
+
+def _nu_interval(model: VoronoiModel, lo: float, hi: float) -> tuple[float, float]:
+    """The nu interval that the calibration maps the nu_m interval (lo, hi) to."""
     cal_lo, cal_hi = (-1.0, 1.0)
     if model.micro.calibration == "paper" and model.micro.nu_range:
         cal_lo, cal_hi = model.micro.nu_range
@@ -189,18 +209,5 @@ def stability(model: VoronoiModel, supports=None) -> StabilityReport:
     nu_lo = max(nu_lo, cal_lo) if np.isfinite(nu_lo) else float("nan")
     nu_hi = min(nu_hi, cal_hi) if np.isfinite(nu_hi) else float("nan")
     if np.isfinite(nu_lo) and np.isfinite(nu_hi) and nu_lo >= nu_hi:
-        nu_lo = nu_hi = float("nan")  # no admissible nu maps back through the calibration
-    rep = StabilityReport(
-        lam_min,
-        lam_max,
-        (float(lo), float(hi)),
-        (float(nu_lo), float(nu_hi)),
-        float(nu_m),
-        stable,
-        margin,
-        min_eig,
-        time.perf_counter() - t0,
-        method,
-    )
-    log.info("stability: %s", rep)
-    return rep
+        return float("nan"), float("nan")  # no admissible nu maps back through the calibration
+    return float(nu_lo), float(nu_hi)

@@ -1,4 +1,5 @@
-"""Distributed solves on PETSc (``solver="petsc"``): petsc4py and MPI.
+"""Partition and patches of distributed solves (``solver="petsc"``; the PETSc engine
+itself is :mod:`dvstatic.parallel.petsc`).
 
 Run the same script or scene on P ranks::
 
@@ -30,14 +31,17 @@ node permutation (N integers), and its patch. Use :func:`patch_memory` and
 from __future__ import annotations
 
 import logging
-import os
 from dataclasses import dataclass
 
 import numpy as np
 
-from . import calibration
-from .loads import BodyForce, Fix, PointLoad, Traction, as_list, select_edges, select_nodes
-from .mesh import Mesh
+from .._env import launched_under_mpi
+from ..errors import InputError
+from ..lattice import calibration
+from ..lattice import geometry as _geometry
+from ..lattice.weights import bond_weights
+from ..mesh import Mesh
+from ..problem import nodal_forces
 
 __all__ = [
     "available",
@@ -55,8 +59,6 @@ __all__ = [
 log = logging.getLogger(__name__)
 
 
-#: KSP options (prefix ``dvstatic_``); any PETSc option given on the command line
-#: (``-dvstatic_ksp_monitor``, ``-dvstatic_pc_type hypre``...) overrides them
 def available() -> bool:
     """True if petsc4py can be imported."""
     try:
@@ -64,16 +66,6 @@ def available() -> bool:
     except ImportError:
         return False
     return True
-
-
-def launched_under_mpi() -> bool:
-    """True if this process was started by an MPI launcher (``mpiexec``), read from
-    the launcher's environment without importing MPI."""
-    for key in ("PMI_SIZE", "OMPI_COMM_WORLD_SIZE", "PMIX_SIZE", "MPI_LOCALNRANKS"):
-        v = os.environ.get(key, "")
-        if v.isdigit() and int(v) >= 1:
-            return True
-    return False
 
 
 def rcb_partition(points: np.ndarray, nparts: int) -> np.ndarray:
@@ -92,9 +84,9 @@ def rcb_partition(points: np.ndarray, nparts: int) -> np.ndarray:
     """
     points = np.asarray(points, dtype=float)
     if not isinstance(nparts, (int, np.integer)) or nparts < 1:
-        raise ValueError(f"nparts must be an integer >= 1, got {nparts!r}")
+        raise InputError(f"nparts must be an integer >= 1, got {nparts!r}", "nparts")
     if nparts > len(points):
-        raise ValueError(f"cannot split {len(points)} points into {nparts} parts")
+        raise InputError(f"cannot split {len(points)} points into {nparts} parts", "nparts")
     part = np.zeros(len(points), dtype=np.int64)
     stack = [(np.arange(len(points)), 0, int(nparts))]
     while stack:
@@ -179,7 +171,8 @@ def layout(mesh: Mesh, rank: int, size: int) -> Layout:
 
 # --------------------------------------------------------------------- owned parts
 def owned_bonds(lay: Layout) -> np.ndarray:
-    """Patch bonds owned by this rank (its node is the lower-numbered end), (E_patch,)."""
+    """Patch bonds owned by this rank (its node is the lower-numbered end), shape
+    (n_patch_bonds,) bool."""
     new_local = lay.new_of[lay.local_nodes]
     b = lay.patch.topology.bonds
     first = np.minimum(new_local[b[:, 0]], new_local[b[:, 1]])
@@ -201,75 +194,44 @@ def micro_parameters(model, lay: Layout, allreduce):
     """
     if isinstance(model.calibration, calibration.MicroParameters):
         return model.calibration
-    if "micro" in model.__dict__:
-        return model.__dict__["micro"]
-    from . import geometry as _geometry
-    from .models import voronoi_weights
-
+    if model.is_calibrated:
+        return model.micro
     geom = _geometry.of(lay.patch)
-    b = lay.patch.topology.bonds
     own_b = owned_bonds(lay)
-    own_t = owned_triangles(lay)
     if model.calibration == "relaxed":
-        bnd = np.zeros(model.mesh.n_points, dtype=bool)
-        bnd[model.mesh.boundary_nodes] = True
-        glob = lay.local_nodes[b]
-        inner = own_b & ~(bnd[glob[:, 0]] | bnd[glob[:, 1]])
-        ln = geom.length
-        s = allreduce(
-            np.array(
-                [inner.sum(), ln[inner].sum(), (ln[inner] ** 2).sum()]
-                + [own_b.sum(), ln[own_b].sum(), (ln[own_b] ** 2).sum()],
-                dtype=float,
-            )
-        )
-        c, s1, s2 = s[:3] if s[0] >= 30 else s[3:]
-        mean = s1 / c
-        spread = float(np.sqrt(max(s2 / c - mean**2, 0.0)) / mean)
+        spread = _interior_spread(model.mesh, lay, geom, own_b, allreduce)
         return calibration.relaxed(
             model.kind, model.mesh, model.E, model.nu, model.bonds, spread=spread
         )
-    w = voronoi_weights(geom) if model.bonds == "voronoi" else None
-    sums = calibration.moment_sums(model.kind, geom, w, own_b, own_t)
+    w = bond_weights(model.bonds, geom)
+    sums = calibration.moment_sums(model.kind, geom, w, own_b, owned_triangles(lay))
     mom = calibration.moments_from_sums(allreduce(sums), model.mesh.area)
     return calibration.paper_from_moments(model.kind, mom, model.E, model.nu)
 
 
+def _interior_spread(mesh: Mesh, lay: Layout, geom, own_b, allreduce) -> float:
+    """sigma_L of the interior bonds (all bonds if fewer than 30), summed over ranks."""
+    b = lay.patch.topology.bonds
+    bnd = np.zeros(mesh.n_points, dtype=bool)
+    bnd[mesh.boundary_nodes] = True
+    glob = lay.local_nodes[b]
+    inner = own_b & ~(bnd[glob[:, 0]] | bnd[glob[:, 1]])
+    ln = geom.length
+    s = allreduce(
+        np.array(
+            [inner.sum(), ln[inner].sum(), (ln[inner] ** 2).sum()]
+            + [own_b.sum(), ln[own_b].sum(), (ln[own_b] ** 2).sum()],
+            dtype=float,
+        )
+    )
+    c, s1, s2 = s[:3] if s[0] >= 30 else s[3:]
+    mean = s1 / c
+    return float(np.sqrt(max(s2 / c - mean**2, 0.0)) / mean)
+
+
 def owned_loads(mesh: Mesh, loads, lay: Layout) -> np.ndarray:
     """External forces on the owned dofs, shape (2 n_owned,)."""
-    n_own, lo = lay.n_owned, lay.lo
-    f = np.zeros((n_own, 2))
-
-    def owned_index(nodes):
-        k = lay.new_of[nodes] - lo
-        keep = (k >= 0) & (k < n_own)
-        return k, keep
-
-    for load in as_list(loads, "Traction, BodyForce or PointLoad"):
-        if isinstance(load, Traction):
-            e = select_edges(mesh, load.where, "Traction")
-            d = mesh.points[e[:, 1]] - mesh.points[e[:, 0]]
-            half = 0.5 * np.hypot(d[:, 0], d[:, 1])
-            for end in (0, 1):
-                k, keep = owned_index(e[:, end])
-                for c in range(2):
-                    f[:, c] += load.value[c] * np.bincount(k[keep], half[keep], n_own)
-        elif isinstance(load, BodyForce):
-            t = lay.patch.triangles
-            share = np.repeat(lay.patch.triangle_areas / 3.0, 3)
-            w = np.bincount(t.ravel(), share, lay.patch.n_points)[:n_own]
-            f += w[:, None] * np.asarray(load.value)[None, :]
-        elif isinstance(load, PointLoad):
-            nodes = select_nodes(mesh, load.nodes, "PointLoad")
-            k, keep = owned_index(nodes)
-            f[k[keep]] += np.asarray(load.value)[None, :]
-        elif isinstance(load, Fix):
-            raise TypeError("Fix is a support: pass it in `supports`, not in `loads`")
-        else:
-            raise TypeError(
-                f"unknown load type {type(load).__name__}; use Traction, BodyForce or PointLoad"
-            )
-    return f.reshape(-1)
+    return nodal_forces(mesh, loads, nodes=lay.local_nodes[: lay.n_owned])
 
 
 def patch_memory(lay: Layout) -> dict:

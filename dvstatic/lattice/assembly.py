@@ -9,21 +9,19 @@ are computed once per mesh; assembly is then a single scatter-add.
 
 from __future__ import annotations
 
-import weakref
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .mesh import Mesh
+from .._cache import PerObject
+from ..mesh import Mesh
 
 if TYPE_CHECKING:  # annotations only: scipy is imported where it is used
     import scipy.sparse as sp
 
 
-__all__ = ["BlockPattern", "pattern", "assemble", "accumulate", "assemble_vector", "triangle_dofs"]
-
-_CACHE: weakref.WeakKeyDictionary[Mesh, BlockPattern] = weakref.WeakKeyDictionary()
+__all__ = ["BlockPattern", "pattern", "accumulate", "to_bsr"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -53,11 +51,7 @@ class BlockPattern:
 
 def pattern(mesh: Mesh) -> BlockPattern:
     """Block pattern of ``mesh`` (cached per mesh)."""
-    p = _CACHE.get(mesh)
-    if p is None:
-        p = _build(mesh)
-        _CACHE[mesh] = p
-    return p
+    return _PATTERN(mesh)
 
 
 def _build(mesh: Mesh) -> BlockPattern:
@@ -104,26 +98,6 @@ def _build(mesh: Mesh) -> BlockPattern:
     return out
 
 
-def assemble(pat: BlockPattern, ke: np.ndarray) -> sp.bsr_matrix:
-    """Sum per-triangle matrices into a (2N, 2N) BSR matrix with 2x2 blocks.
-
-    Parameters
-    ----------
-    pat : BlockPattern
-    ke : ndarray, shape (M, 6, 6)
-        Triangle matrices on the interleaved dofs ``[x0, y0, x1, y1, x2, y2]``.
-    """
-    import scipy.sparse as sp
-
-    m = ke.shape[0]
-    blocks = ke.reshape(m, 3, 2, 3, 2).transpose(0, 1, 3, 2, 4).reshape(m * 9, 4)
-    data = np.empty((pat.nnzb, 4))
-    for c in range(4):
-        data[:, c] = np.bincount(pat.tri_block, weights=blocks[:, c], minlength=pat.nnzb)
-    n2 = 2 * pat.n_nodes
-    return sp.bsr_matrix((data.reshape(-1, 2, 2), pat.indices, pat.indptr), shape=(n2, n2))
-
-
 def accumulate(pat: BlockPattern, ke: np.ndarray, data: np.ndarray, sl: slice) -> None:
     """Add triangle matrices ``ke`` (m, 6, 6) of triangles ``sl`` into block data (nnzb, 4)."""
     m = ke.shape[0]
@@ -136,12 +110,12 @@ def accumulate(pat: BlockPattern, ke: np.ndarray, data: np.ndarray, sl: slice) -
         data[lo:hi, c] += np.bincount(local, weights=blocks[:, c], minlength=hi - lo)
 
 
-def triangle_dofs(mesh: Mesh) -> np.ndarray:
-    """Interleaved dof indices of each triangle, shape (M, 6)."""
-    t = mesh.triangles
-    return np.stack([2 * t, 2 * t + 1], axis=-1).reshape(len(t), 6)
+def to_bsr(pat: BlockPattern, data: np.ndarray) -> sp.bsr_matrix:
+    """The (2N, 2N) BSR matrix of block data (nnzb, 4) on the pattern."""
+    import scipy.sparse as sp
+
+    n2 = 2 * pat.n_nodes
+    return sp.bsr_matrix((data.reshape(-1, 2, 2), pat.indices, pat.indptr), shape=(n2, n2))
 
 
-def assemble_vector(mesh: Mesh, fe: np.ndarray) -> np.ndarray:
-    """Sum per-triangle vectors (M, 6) into a global interleaved vector (2N,)."""
-    return np.bincount(triangle_dofs(mesh).ravel(), weights=fe.ravel(), minlength=2 * mesh.n_points)
+_PATTERN = PerObject("sparsity pattern", _build)

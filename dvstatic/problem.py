@@ -1,4 +1,5 @@
-"""Supports and loads: :class:`Fix`, :class:`Traction`, :class:`BodyForce`, :class:`PointLoad`.
+"""The problem: supports and loads (:class:`Fix`, :class:`Traction`, :class:`BodyForce`,
+:class:`PointLoad`), the constrained dofs and the load vector (layer 3).
 
 ``where`` selects nodes or boundary edges: a part name of the mesh (``"left"``,
 ``"right"``, ``"bottom"``, ``"top"`` for rectangles), an index array of nodes
@@ -15,9 +16,24 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._checks import check_vector2
+from .errors import InputError
+from .linalg import check_restrained
 from .mesh import Mesh
 
-__all__ = ["Fix", "Traction", "BodyForce", "PointLoad", "load_vector", "constraints", "as_list"]
+__all__ = [
+    "Fix",
+    "Traction",
+    "BodyForce",
+    "PointLoad",
+    "as_list",
+    "select_nodes",
+    "select_edges",
+    "support_components",
+    "constraints",
+    "check_restrained",
+    "load_vector",
+    "nodal_forces",
+]
 
 
 def _where_ok(where, name: str) -> None:
@@ -37,14 +53,16 @@ def _component(value, label: str):
     if isinstance(value, numbers.Real) and not isinstance(value, bool):
         v = float(value)
         if not np.isfinite(v):
-            raise ValueError(f"Fix: {label} must be finite, got {value!r}")
+            raise InputError(f"Fix: {label} must be finite, got {value!r}", label)
         return v
     try:
         arr = np.asarray(value, dtype=float)
     except (TypeError, ValueError):
         raise TypeError(f"Fix: {label} must be a number, an array of numbers or None") from None
     if arr.ndim != 1 or not np.all(np.isfinite(arr)):
-        raise ValueError(f"Fix: {label} must be a finite number or a 1-D array (one per node)")
+        raise InputError(
+            f"Fix: {label} must be a finite number or a 1-D array (one per node)", label
+        )
     return arr
 
 
@@ -143,19 +161,23 @@ def as_list(items, cls_names: str) -> list:
 
 
 def select_nodes(mesh: Mesh, where, what: str) -> np.ndarray:
-    """Node indices from a part name or an index array."""
+    """Node indices (sorted, unique) from a part name or an index array."""
     if isinstance(where, str):
         return mesh.part_nodes(where)
     arr = np.asarray(where)
     if arr.size == 0:
-        raise ValueError(f"{what}: the node selection is empty")
+        raise InputError(f"{what}: the node selection is empty", "where")
     if not np.issubdtype(arr.dtype, np.integer):
         raise TypeError(f"{what}: node indices must be integers, got dtype {arr.dtype}")
     if arr.ndim != 1:
-        raise ValueError(f"{what}: node indices must be a 1-D array, got shape {arr.shape}")
+        raise InputError(
+            f"{what}: node indices must be a 1-D array, got shape {arr.shape}", "where"
+        )
     if arr.min() < 0 or arr.max() >= mesh.n_points:
-        raise ValueError(
-            f"{what}: node indices must lie in [0, {mesh.n_points}), got [{arr.min()}, {arr.max()}]"
+        raise InputError(
+            f"{what}: node indices must lie in [0, {mesh.n_points}), "
+            f"got [{arr.min()}, {arr.max()}]",
+            "where",
         )
     return np.unique(arr.astype(np.int64))
 
@@ -166,7 +188,7 @@ def select_edges(mesh: Mesh, where, what: str) -> np.ndarray:
         return mesh.part_edges(where)
     arr = np.asarray(where)
     if arr.ndim != 2 or arr.shape[1] != 2:
-        raise ValueError(f"{what}: edges must have shape (m, 2), got {arr.shape}")
+        raise InputError(f"{what}: edges must have shape (m, 2), got {arr.shape}", "where")
     if not np.issubdtype(arr.dtype, np.integer):
         raise TypeError(f"{what}: edge indices must be integers, got dtype {arr.dtype}")
     n = mesh.n_points
@@ -175,8 +197,55 @@ def select_edges(mesh: Mesh, where, what: str) -> np.ndarray:
     want = np.sort(arr.astype(np.int64), axis=1) @ np.array([n, 1])
     if not np.all(np.isin(want, keys)):
         bad = arr[~np.isin(want, keys)][0]
-        raise ValueError(f"{what}: {bad.tolist()} is not a boundary edge of the mesh")
+        raise InputError(f"{what}: {bad.tolist()} is not a boundary edge of the mesh", "where")
     return arr.astype(np.int64)
+
+
+def _load_terms(mesh: Mesh, load):
+    """Nodal contributions of one load: node indices (k,) and forces (k, 2)."""
+    if isinstance(load, Traction):
+        e = select_edges(mesh, load.where, "Traction")
+        d = mesh.points[e[:, 1]] - mesh.points[e[:, 0]]
+        half = 0.5 * np.hypot(d[:, 0], d[:, 1])
+        nodes = np.concatenate([e[:, 0], e[:, 1]])
+        return nodes, np.concatenate([half, half])[:, None] * np.asarray(load.value)[None, :]
+    if isinstance(load, BodyForce):
+        share = np.repeat(mesh.triangle_areas / 3.0, 3)
+        return mesh.triangles.ravel(), share[:, None] * np.asarray(load.value)[None, :]
+    if isinstance(load, PointLoad):
+        nodes = select_nodes(mesh, load.nodes, "PointLoad")
+        return nodes, np.broadcast_to(np.asarray(load.value), (nodes.size, 2))
+    if isinstance(load, Fix):
+        raise TypeError("Fix is a support: pass it in `supports`, not in `loads`")
+    raise TypeError(
+        f"unknown load type {type(load).__name__}; use Traction, BodyForce or PointLoad"
+    )
+
+
+def nodal_forces(mesh: Mesh, loads, nodes: np.ndarray | None = None) -> np.ndarray:
+    """External forces on ``nodes`` (all nodes if None), interleaved, shape (2 len(nodes),).
+
+    Tractions are lumped half to each end node of every edge (exact for the resultant
+    and the moment about each edge's midpoint); body forces with one third of the area
+    of each neighbouring triangle (the consistent lumping of P1 elements); point loads
+    go to their nodes. The distributed engine asks for its own nodes only.
+    """
+    n = mesh.n_points
+    if nodes is None:
+        local = np.arange(n)
+        m = n
+    else:
+        local = np.full(n, -1, dtype=np.int64)
+        local[nodes] = np.arange(len(nodes))
+        m = len(nodes)
+    f = np.zeros((m, 2))
+    for load in as_list(loads, "Traction, BodyForce or PointLoad"):
+        where, values = _load_terms(mesh, load)
+        k = local[where]
+        keep = k >= 0
+        for c in range(2):
+            f[:, c] += np.bincount(k[keep], values[keep, c], m)
+    return f.reshape(-1)
 
 
 def load_vector(mesh: Mesh, loads, scale: float = 1.0) -> np.ndarray:
@@ -189,31 +258,38 @@ def load_vector(mesh: Mesh, loads, scale: float = 1.0) -> np.ndarray:
     scale : float
         Load factor applied to all loads.
     """
-    n = mesh.n_points
-    f = np.zeros((n, 2))
-    for load in as_list(loads, "Traction, BodyForce or PointLoad"):
-        if isinstance(load, Traction):
-            e = select_edges(mesh, load.where, "Traction")
-            d = mesh.points[e[:, 1]] - mesh.points[e[:, 0]]
-            half = 0.5 * np.hypot(d[:, 0], d[:, 1])
-            for c in range(2):
-                f[:, c] += load.value[c] * (
-                    np.bincount(e[:, 0], half, n) + np.bincount(e[:, 1], half, n)
-                )
-        elif isinstance(load, BodyForce):
-            share = np.repeat(mesh.triangle_areas / 3.0, 3)
-            w = np.bincount(mesh.triangles.ravel(), share, n)
-            f += w[:, None] * np.asarray(load.value)[None, :]
-        elif isinstance(load, PointLoad):
-            nodes = select_nodes(mesh, load.nodes, "PointLoad")
-            f[nodes] += np.asarray(load.value)[None, :]
-        elif isinstance(load, Fix):
-            raise TypeError("Fix is a support: pass it in `supports`, not in `loads`")
-        else:
-            raise TypeError(
-                f"unknown load type {type(load).__name__}; use Traction, BodyForce or PointLoad"
-            )
-    return scale * f.reshape(-1)
+    return scale * nodal_forces(mesh, loads)
+
+
+def support_components(mesh: Mesh, supports) -> list[tuple[object, int, np.ndarray, object]]:
+    """Every prescribed component: ``(where, component, nodes, value)``.
+
+    ``component`` is 0 (x) or 1 (y); ``nodes`` the selected node indices; ``value`` a
+    float or an array with one value per node (checked against ``nodes``).
+    """
+    out = []
+    for s in as_list(supports, "Fix"):
+        if not isinstance(s, Fix):
+            raise TypeError(f"supports must be Fix objects, got {type(s).__name__}")
+        nodes = select_nodes(mesh, s.where, "Fix")
+        for comp, value in ((0, s.x), (1, s.y)):
+            if value is None:
+                continue
+            if np.ndim(value) != 0:
+                value = _per_node(s.where, nodes, np.asarray(value, dtype=float), "xy"[comp])
+            out.append((s.where, comp, nodes, value))
+    return out
+
+
+def _per_node(where, nodes: np.ndarray, value: np.ndarray, label: str) -> np.ndarray:
+    """Per-node values given in the order of ``where``, in the (sorted) order of ``nodes``."""
+    given = nodes if isinstance(where, str) else np.asarray(where).reshape(-1)
+    if value.shape != given.shape:
+        raise InputError(f"Fix: {label} has {value.size} values for {given.size} nodes", label)
+    if given is nodes:
+        return value
+    _, first = np.unique(given, return_index=True)
+    return value[first]
 
 
 def constraints(mesh: Mesh, supports) -> tuple[np.ndarray, np.ndarray]:
@@ -226,22 +302,13 @@ def constraints(mesh: Mesh, supports) -> tuple[np.ndarray, np.ndarray]:
 
     Raises
     ------
-    ValueError
+    InputError
         If the same dof is prescribed twice with different values.
     """
     dof_list, val_list = [], []
-    for s in as_list(supports, "Fix"):
-        if not isinstance(s, Fix):
-            raise TypeError(f"supports must be Fix objects, got {type(s).__name__}")
-        nodes = select_nodes(mesh, s.where, "Fix")
-        for comp, value in ((0, s.x), (1, s.y)):
-            if value is None:
-                continue
-            v = np.broadcast_to(value, nodes.shape) if np.ndim(value) == 0 else np.asarray(value)
-            if v.shape != nodes.shape:
-                raise ValueError(f"Fix: {'xy'[comp]} has {v.size} values for {nodes.size} nodes")
-            dof_list.append(2 * nodes + comp)
-            val_list.append(np.asarray(v, dtype=float))
+    for _, comp, nodes, value in support_components(mesh, supports):
+        dof_list.append(2 * nodes + comp)
+        val_list.append(np.broadcast_to(np.asarray(value, dtype=float), nodes.shape))
     if not dof_list:
         return np.zeros(0, np.int64), np.zeros(0)
     dofs = np.concatenate(dof_list)
@@ -251,9 +318,10 @@ def constraints(mesh: Mesh, supports) -> tuple[np.ndarray, np.ndarray]:
     same = dofs[1:] == dofs[:-1]
     if np.any(same & (vals[1:] != vals[:-1])):
         k = int(np.flatnonzero(same & (vals[1:] != vals[:-1]))[0])
-        raise ValueError(
+        raise InputError(
             f"conflicting supports: dof {dofs[k]} (node {dofs[k] // 2}, "
-            f"{'xy'[dofs[k] % 2]}) is prescribed as {vals[k]} and {vals[k + 1]}"
+            f"{'xy'[dofs[k] % 2]}) is prescribed as {vals[k]} and {vals[k + 1]}",
+            "supports",
         )
     keep = np.concatenate([[True], ~same])
     return dofs[keep], vals[keep]

@@ -1,5 +1,5 @@
 """Mesh generators: rectangles, polygons with holes, discs (periodic squares are in
-:mod:`dvstatic.periodic`).
+:mod:`dvstatic.mesh.periodic`).
 
 Every generator places boundary nodes exactly on the boundary at spacing about ``h``
 (polygon corners included), fills the interior according to ``kind``:
@@ -21,9 +21,25 @@ import logging
 
 import numpy as np
 
-from ._checks import check_positive, check_seed
+from .._checks import check_choice, check_positive, check_seed
+from .._planar import circumcentres
+from ..errors import InputError
+from .core import Mesh
 from .domain import Circle, Domain, Polygon, rectangle_domain
-from .mesh import Mesh
+from .ordering import spatial_order
+from .sampling import unit_disc
+
+__all__ = [
+    "KINDS",
+    "rectangle",
+    "generate",
+    "polygon",
+    "disc",
+    "lloyd",
+    "with_spread",
+    "check_sampling",
+    "SQRT3_2",
+]
 
 log = logging.getLogger(__name__)
 
@@ -52,13 +68,14 @@ def rectangle(
         Rectangle size (length units), > 0.
     h : float
         Target node spacing, 0 < h <= min(width, height).
-    kind : {"lattice", "jittered", "random"}
+    kind : {"lattice", "jittered", "random", "cvt"}
         ``lattice``: regular triangular lattice (rows ``h sqrt(3)/2`` apart, exact
         equilateral triangles when the size fits); ``jittered``: lattice nodes shifted
         by up to ``jitter * h``, the shift tapering off within about one spacing of the
         sides, where nodes slide along their side by up to ``jitter * h / 2``; ``random``:
         uniformly distributed interior points (same density), boundary nodes at
-        spacing about ``h``.
+        spacing about ``h``; ``cvt``: random points moved by Lloyd iterations towards a
+        centroidal Voronoi tessellation.
     jitter : float
         Relative jitter for ``kind="jittered"``, in [0, 0.5).
     seed : int or None
@@ -74,25 +91,19 @@ def rectangle(
     height = check_positive("height", height)
     h = check_positive("h", h)
     if h > min(width, height):
-        raise ValueError(
+        raise InputError(
             f"h = {h} is larger than the domain (min(width, height) = {min(width, height)}); "
-            "use h <= min(width, height)"
+            "use h <= min(width, height)",
+            "h",
         )
-    kind, jitter, rng = _sampling(kind, jitter, seed)
+    kind, jitter, rng = check_sampling(kind, jitter, seed)
     if kind in ("random", "cvt"):
         pts = _random_rectangle_points(width, height, h, rng)
     else:
         pts, boundary, side_dir, side_step = _lattice_points(width, height, h)
         if kind == "jittered" and jitter > 0:
             _jitter_rectangle(pts, boundary, side_dir, side_step, width, height, h, jitter, rng)
-    pts = pts[spatial_order(pts)]
-    domain = rectangle_domain(width, height)
-    if kind == "cvt":
-        pts = lloyd(domain, pts, h)
-    pts, tri, parts = domain.triangulate(pts, 1e-9 * h)
-    mesh = Mesh(pts, tri, parts=parts, domain=domain)
-    log.debug("rectangle %s: %r", kind, mesh)
-    return mesh
+    return _triangulated(rectangle_domain(width, height), pts, h, kind)
 
 
 def generate(
@@ -109,7 +120,8 @@ def generate(
     domain : Domain
     h : float
         Target node spacing, 0 < h <= the smallest extent of the domain.
-    kind : {"lattice", "jittered", "random"}
+    kind : {"lattice", "jittered", "random", "cvt"}
+        As for :func:`rectangle`.
     jitter : float
         Relative jitter for ``kind="jittered"``, in [0, 0.5).
     seed : int or None
@@ -126,11 +138,12 @@ def generate(
     h = check_positive("h", h)
     lo, hi = domain.bbox
     if h > float(np.min(hi - lo)):
-        raise ValueError(
+        raise InputError(
             f"h = {h} is larger than the domain (smallest extent {float(np.min(hi - lo)):.4g}); "
-            "use a smaller h"
+            "use a smaller h",
+            "h",
         )
-    kind, jitter, rng = _sampling(kind, jitter, seed)
+    kind, jitter, rng = check_sampling(kind, jitter, seed)
     bnd, seg_a, seg_b = _boundary_points(domain, h)
     inner = _interior_points(domain, h, "random" if kind == "cvt" else kind, jitter, rng)
     # Gabriel condition: no interior point inside the diametral circle of a boundary
@@ -143,7 +156,12 @@ def generate(
         dist, idx = tree.query(inner, k=k)
         dist, idx = dist.reshape(len(inner), k), idx.reshape(len(inner), k)
         inner = inner[~np.any(dist < half[idx] * (1 + 1e-9), axis=1)]
-    pts = np.vstack([bnd, inner])
+    return _triangulated(domain, np.vstack([bnd, inner]), h, kind)
+
+
+def _triangulated(domain: Domain, pts: np.ndarray, h: float, kind: str) -> Mesh:
+    """The mesh of ``pts`` in ``domain``: Morton order, Lloyd iterations for ``cvt``,
+    conforming Delaunay triangulation."""
     pts = pts[spatial_order(pts)]
     if kind == "cvt":
         pts = lloyd(domain, pts, h)
@@ -256,7 +274,7 @@ def _interior_points(domain: Domain, h: float, kind: str, jitter: float, rng) ->
     p, d = p[keep], d[keep]
     if kind == "jittered" and jitter > 0 and len(p):
         taper = np.clip((d - 0.4 * h) / (0.8 * h), 0.0, 1.0)
-        trial = p + _disc(rng, len(p)) * (jitter * h * taper)[:, None]
+        trial = p + unit_disc(rng, len(p)) * (jitter * h * taper)[:, None]
         ok = domain.contains(trial) & (_distance_to_boundary(domain, trial) >= 0.3 * h)
         p[ok] = trial[ok]
     return p
@@ -283,13 +301,11 @@ def lloyd(
     -------
     ndarray, shape (N, 2)
     """
-    from .kinematics import circumcentres
-
     p = np.array(points, dtype=float)
     on_bnd = _distance_to_boundary(domain, p) <= 1e-9 * h
     movable = np.flatnonzero(~on_bnd)
     for _ in range(iterations):
-        tri = domain._delaunay(p)
+        tri = domain.delaunay(p)
         x = p[tri]
         cc = circumcentres(x)
         n = len(p)
@@ -344,15 +360,16 @@ def with_spread(
 
     Raises
     ------
-    ValueError
+    InputError
         If the target is below the spread of ``mesh`` or cannot be reached.
     """
     sigma_l = check_positive("sigma_l", sigma_l)
     s0 = mesh.edge_length_spread()
     if sigma_l < s0 * (1 - rtol):
-        raise ValueError(
+        raise InputError(
             f"target sigma_L = {sigma_l} is below the spread of the starting mesh "
-            f"({s0:.4f}); start from a more regular mesh"
+            f"({s0:.4f}); start from a more regular mesh",
+            "sigma_l",
         )
     if sigma_l <= s0 * (1 + rtol):
         return mesh
@@ -377,53 +394,20 @@ def with_spread(
     reached = m.edge_length_spread()
     log.info("with_spread: target sigma_L %.4f, reached %.4f", sigma_l, reached)
     if abs(reached / sigma_l - 1) > 5 * rtol:
-        raise ValueError(f"could not reach sigma_L = {sigma_l} (best {reached:.4f})")
+        raise InputError(f"could not reach sigma_L = {sigma_l} (best {reached:.4f})", "sigma_l")
     return m
 
 
-def spatial_order(points: np.ndarray) -> np.ndarray:
-    """Permutation that sorts points along a Morton (Z-order) curve.
-
-    Neighbouring particles get nearby indices, which narrows the band of the
-    stiffness matrix touched by each assembly chunk and improves cache use in
-    matrix-vector products and AMG.
-    """
-    lo = points.min(axis=0)
-    span = max(float(np.max(np.ptp(points, axis=0))), np.finfo(float).tiny)
-    q = np.minimum(((points - lo) / span * 65535.0).astype(np.uint64), 65535)
-
-    def spread(v: np.ndarray) -> np.ndarray:
-        v = (v | (v << np.uint64(8))) & np.uint64(0x00FF00FF)
-        v = (v | (v << np.uint64(4))) & np.uint64(0x0F0F0F0F)
-        v = (v | (v << np.uint64(2))) & np.uint64(0x33333333)
-        return (v | (v << np.uint64(1))) & np.uint64(0x55555555)
-
-    key = spread(q[:, 0]) | (spread(q[:, 1]) << np.uint64(1))
-    return np.argsort(key, kind="stable")
-
-
-def _sampling(kind: str, jitter: float, seed) -> tuple[str, float, np.random.Generator]:
-    """Checked ``kind`` and ``jitter`` (in [0, 0.5)) and the generator for ``seed``."""
-    kind = _check_kind(kind)
+def check_sampling(
+    kind: str, jitter: float, seed, kinds=KINDS
+) -> tuple[str, float, np.random.Generator]:
+    """Checked ``kind`` (one of ``kinds``) and ``jitter`` (in [0, 0.5)) and the random
+    generator for ``seed``."""
+    kind = check_choice("mesh kind", kind, kinds, "kind")
     jitter = float(check_positive("jitter", jitter, allow_zero=True))
     if jitter >= 0.5:
-        raise ValueError(f"jitter must be in [0, 0.5), got {jitter}")
+        raise InputError(f"jitter must be in [0, 0.5), got {jitter}", "jitter")
     return kind, jitter, np.random.default_rng(check_seed(seed))
-
-
-def _check_kind(kind: str) -> str:
-    if not isinstance(kind, str):
-        raise TypeError(f"kind must be a string, one of {KINDS}, got {type(kind).__name__}")
-    if kind not in KINDS:
-        raise ValueError(f"unknown mesh kind {kind!r}; accepted: {', '.join(KINDS)}")
-    return kind
-
-
-def _disc(rng: np.random.Generator, n: int) -> np.ndarray:
-    """n points uniformly distributed in the unit disc."""
-    r = np.sqrt(rng.random(n))
-    t = 2 * np.pi * rng.random(n)
-    return np.c_[r * np.cos(t), r * np.sin(t)]
 
 
 def _lattice_points(width: float, height: float, h: float):
@@ -465,7 +449,7 @@ def _jitter_rectangle(p, boundary, side_dir, side_step, width, height, h, jitter
     interior = ~boundary
     d_wall = np.minimum.reduce([p[:, 0], width - p[:, 0], p[:, 1], height - p[:, 1]])
     taper = np.clip((d_wall - 0.4 * h) / (0.8 * h), 0.0, 1.0)
-    shift = _disc(rng, len(p)) * (jitter * h * taper)[:, None]
+    shift = unit_disc(rng, len(p)) * (jitter * h * taper)[:, None]
     p[interior] += shift[interior]
     slide = (rng.random(len(p)) * 2 - 1) * 0.5 * jitter * side_step
     for axis in (0, 1):
@@ -494,53 +478,3 @@ def _random_rectangle_points(width: float, height: float, h: float, rng) -> np.n
         margin + (height - 2 * margin) * rng.random(n_int),
     ]
     return np.vstack([bnd, inner])
-
-
-def _move_in_domain(domain: Domain, p: np.ndarray, amplitude: float, rng, tol: float) -> np.ndarray:
-    """Random moves keeping boundary nodes on their curve and corners fixed."""
-    p = p.copy()
-    dist, names = domain.curve_distances(p)
-    on = dist <= tol
-    n_on = on.sum(axis=1)
-    corners = domain.corners()
-    is_corner = n_on >= 2
-    if len(corners):
-        dc = np.min(
-            np.hypot(p[:, None, 0] - corners[None, :, 0], p[:, None, 1] - corners[None, :, 1]),
-            axis=1,
-        )
-        is_corner |= dc <= tol
-    curves = []
-    for loop in domain.loops:
-        if isinstance(loop, Polygon):
-            curves.extend(("seg", a, b) for _, a, b in loop.curves())
-        else:
-            curves.append(("circle", loop, None))
-    interior = n_on == 0
-    # boundary nodes: slide along their curve
-    for c, (kind, a, b) in enumerate(curves):
-        sel = np.flatnonzero(on[:, c] & ~is_corner & (n_on == 1))
-        if sel.size == 0:
-            continue
-        s = (rng.random(sel.size) * 2 - 1) * amplitude
-        if kind == "seg":
-            t = (b - a) / np.hypot(*(b - a))
-            length = np.hypot(*(b - a))
-            u = np.einsum("ij,j->i", p[sel] - a, t) + s
-            u = np.clip(u, 0.05 * amplitude, length - 0.05 * amplitude)
-            p[sel] = a + u[:, None] * t
-        else:
-            circ: Circle = a
-            cc = np.asarray(circ.center)
-            ang = np.arctan2(p[sel, 1] - cc[1], p[sel, 0] - cc[0]) + s / circ.radius
-            p[sel] = cc + circ.radius * np.c_[np.cos(ang), np.sin(ang)]
-    idx = np.flatnonzero(interior)
-    for _ in range(8):
-        if idx.size == 0:
-            break
-        trial = p[idx] + _disc(rng, idx.size) * amplitude
-        d, _ = domain.curve_distances(trial)
-        good = domain.contains(trial) & (d.min(axis=1) > 0.05 * amplitude)
-        p[idx[good]] = trial[good]
-        idx = idx[~good]
-    return p

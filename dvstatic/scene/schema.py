@@ -1,34 +1,34 @@
-"""Scene files: a whole problem (mesh, material, model, supports, loads, solver,
-outputs) as TOML data, read with the standard library and validated against
-:data:`SCHEMA`.
-
-Scene values are data: nothing is evaluated as code. Every problem (unknown key,
-wrong type, missing required key, impossible value, unknown boundary name, missing
-mesh file, ...) raises :class:`SceneError` naming the file and the key path.
-The reference of every key is generated from :data:`SCHEMA` (``docs/scenes.md``).
-"""
+"""Scene-file schema: every key with its kind, default, choices and meaning
+(:data:`SCHEMA`), its validation and the generated reference (``docs/scenes.md``).
+The ``[solver]`` table is derived from :class:`~dvstatic.solvers.SolveOptions`."""
 
 from __future__ import annotations
 
 import copy
+import dataclasses
+import logging
 import numbers
 import tomllib
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
-__all__ = ["SceneError", "Scene", "load", "SCHEMA", "reference_markdown"]
+from ..errors import InputError
+from ..solvers.options import ALIASES, SolveOptions
+
+log = logging.getLogger(__name__)
+
+__all__ = ["SceneError", "F", "SCHEMA", "SOLVER_KEYS", "parse", "reference_markdown"]
 
 
-class SceneError(ValueError):
+class SceneError(InputError):
     """A scene file problem: ``str(err)`` is ``"<file>: <key path>: <problem>"``."""
 
     def __init__(self, file, key: str, message: str):
         self.file = str(file)
         self.key = key
         self.problem = message
-        super().__init__(f"{file}: {key}: {message}" if key else f"{file}: {message}")
+        super().__init__(f"{file}: {key}: {message}" if key else f"{file}: {message}", key)
 
 
 @dataclass(frozen=True)
@@ -153,37 +153,7 @@ SCHEMA: dict[str, F] = {
             "value": F("point", "force vector (fx, fy)", required=True),
         },
     ),
-    "solver": F(
-        "table",
-        "how to solve",
-        default={},
-        schema={
-            "type": F(
-                "string",
-                "linear solver (petsc: distributed, run under mpiexec; docs/parallel.md)",
-                default="auto",
-                choices=("auto", "direct", "amg", "dynamic-relaxation", "petsc"),
-            ),
-            "nonlinear": F(
-                "bool", "large displacements (Newton with load stepping)", default=False
-            ),
-            "steps": F("int", "nonlinear: initial number of load steps", default=10),
-            "rtol": F("number", "AMG relative tolerance", default=1e-10),
-            "newton_rtol": F(
-                "number", "nonlinear: residual tolerance relative to the load", default=1e-8
-            ),
-            "max_iter": F("int", "nonlinear: Newton iterations per step", default=25),
-            "best_effort": F(
-                "bool",
-                "return (and write) the last state of an iteration that does "
-                "not converge, marked unconverged; the command exits with code 4",
-                default=False,
-            ),
-            "allow_unstable": F(
-                "bool", "nonlinear: accept unstable converged states", default=False
-            ),
-        },
-    ),
+    "solver": F("table", "how to solve (the options of dv.solve)", default={}, schema=None),
     "output": F(
         "table",
         "what to write",
@@ -222,32 +192,45 @@ SCHEMA: dict[str, F] = {
 }
 
 
-def load(path: str | Path, overrides=()) -> Scene:
-    """Read and validate a scene file.
+def _solver_schema() -> dict[str, F]:
+    """The ``[solver]`` table, derived from :class:`~dvstatic.solvers.SolveOptions`."""
+    out = {}
+    for f in dataclasses.fields(SolveOptions):
+        meta = f.metadata
+        if not meta["scene"]:
+            continue
+        out[meta["scene_key"] or f.name] = F(
+            meta["kind"], meta["doc"], default=f.default, choices=meta["choices"]
+        )
+    return out
 
-    Parameters
-    ----------
-    path : str or Path
-    overrides : sequence of str
-        ``"key.path=value"`` settings applied before validation; the value is a TOML
-        value (``mesh.h=0.05``, ``model.type="RV"``, ``solver.nonlinear=true``).
+
+#: scene key of every option in ``[solver]`` (``type`` is ``solver``)
+SOLVER_KEYS = {
+    (f.metadata["scene_key"] or f.name): f.name
+    for f in dataclasses.fields(SolveOptions)
+    if f.metadata["scene"]
+}
+SCHEMA["solver"] = dataclasses.replace(SCHEMA["solver"], schema=_solver_schema())
+
+
+def parse(path, content: bytes, overrides=()) -> dict:
+    """Validated scene data (every key, defaults filled in) from TOML ``content``.
 
     Raises
     ------
     SceneError
     """
-    path = Path(path)
-    if not path.is_file():
-        raise SceneError(path, "", "scene file not found")
     try:
-        raw = tomllib.loads(path.read_text())
+        raw = tomllib.loads(content.decode())
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise SceneError(path, "", f"not valid TOML: {exc}") from None
     for item in overrides:
         _apply_override(path, raw, item)
+    _rename_aliases(path, raw)
     data = _validate(path, raw, SCHEMA, "")
     _check_rules(path, data)
-    return Scene(path, data)
+    return data
 
 
 def _apply_override(path, raw: dict, item: str) -> None:
@@ -273,6 +256,19 @@ def _apply_override(path, raw: dict, item: str) -> None:
     if isinstance(node, list):
         raise SceneError(path, key, "cannot set a whole list element")
     node[parts[-1]] = parsed
+
+
+def _rename_aliases(path, raw: dict) -> None:
+    """Deprecated ``[solver]`` keys under their new names (with a warning)."""
+    solver = raw.get("solver")
+    if not isinstance(solver, dict):
+        return
+    for old, new in ALIASES.items():
+        if old in solver:
+            if new in solver:
+                raise SceneError(path, f"solver.{old}", f"give solver.{new} only (its new name)")
+            log.warning("%s: solver.%s is deprecated; use solver.%s", path, old, new)
+            solver[new] = solver.pop(old)
 
 
 def _type_name(v) -> str:
@@ -421,158 +417,6 @@ def _check_rules(path, d: dict) -> None:
         raise SceneError(path, "output.fe_refine", f"must be in [0, 6], got {o['fe_refine']}")
     if o["scale"] is not None and o["scale"] <= 0:
         raise SceneError(path, "output.scale", f"must be > 0, got {o['scale']}")
-
-
-@dataclass(frozen=True)
-class Scene:
-    """A validated scene: ``data`` holds every key with its default filled in."""
-
-    path: Path
-    data: dict
-
-    @property
-    def name(self) -> str:
-        return self.data["output"]["name"] or self.path.stem
-
-    def _err(self, key: str, exc: Exception) -> SceneError:
-        return SceneError(self.path, key, str(exc))
-
-    def build_mesh(self):
-        """The mesh described by ``[mesh]``."""
-        from . import mesh as meshmod
-        from .domain import Circle, Domain, Polygon, rectangle_domain
-        from .io import read_mesh
-
-        m = self.data["mesh"]
-        t = m["type"]
-        if t == "file":
-            p = Path(m["path"])
-            if not p.is_absolute():
-                p = self.path.parent / p
-            if not p.is_file():
-                raise SceneError(self.path, "mesh.path", f"mesh file not found: {p}")
-            try:
-                return read_mesh(p)
-            except ValueError as exc:
-                raise self._err("mesh.path", exc) from None
-        holes = []
-        for i, h in enumerate(m["holes"]):
-            try:
-                if h["type"] == "circle":
-                    holes.append(Circle(tuple(h["center"]), h["radius"], h["name"]))
-                else:
-                    holes.append(
-                        Polygon(np.asarray(h["vertices"]), (h["name"],) * len(h["vertices"]))
-                    )
-            except (ValueError, TypeError) as exc:
-                raise self._err(f"mesh.holes[{i}]", exc) from None
-        common = {"kind": m["kind"], "jitter": m["jitter"], "seed": m["seed"]}
-        try:
-            if t == "rectangle":
-                if not holes:
-                    return meshmod.rectangle(m["width"], m["height"], m["h"], **common)
-                outer = rectangle_domain(m["width"], m["height"]).outer
-            elif t == "polygon":
-                v = np.asarray(m["vertices"])
-                names = m["names"] or [f"edge{i}" for i in range(len(v))]
-                if len(names) != len(v):
-                    raise SceneError(
-                        self.path, "mesh.names", f"{len(names)} names for {len(v)} polygon edges"
-                    )
-                outer = Polygon(v, tuple(names))
-            else:
-                outer = Circle(tuple(m["center"]), m["radius"], "boundary")
-        except SceneError:
-            raise
-        except (ValueError, TypeError) as exc:
-            key = {"rectangle": "mesh", "polygon": "mesh.vertices", "disc": "mesh.radius"}[t]
-            if "h = " in str(exc):
-                key = "mesh.h"
-            raise self._err(key, exc) from None
-        try:
-            domain = Domain(outer, tuple(holes))
-        except ValueError as exc:
-            msg = str(exc)
-            key = "mesh.holes" if "hole" in msg else "mesh"
-            raise self._err(key, exc) from None
-        try:
-            return meshmod.generate(domain, m["h"], **common)
-        except (ValueError, TypeError) as exc:
-            key = "mesh.h" if "h = " in str(exc) else "mesh"
-            raise self._err(key, exc) from None
-
-    def build_model(self, mesh):
-        """The DV or RV model of ``[model]`` and ``[material]``."""
-        from .models import DV, RV
-
-        cls = DV if self.data["model"]["type"] == "DV" else RV
-        mat = self.data["material"]
-        try:
-            return cls(
-                mesh,
-                mat["E"],
-                mat["nu"],
-                calibration=self.data["model"]["calibration"],
-                bonds=self.data["model"]["bonds"],
-            )
-        except ValueError as exc:
-            raise self._err("material.nu" if "nu" in str(exc) else "material", exc) from None
-
-    def _nodes(self, mesh, item: dict, key: str):
-        if item.get("at") is not None:
-            d = np.hypot(*(mesh.points - np.asarray(item["at"])).T)
-            return np.array([int(np.argmin(d))])
-        where = item["where"]
-        if isinstance(where, str):
-            if where not in mesh.parts:
-                known = ", ".join(repr(k) for k in mesh.parts) or "none"
-                raise SceneError(
-                    self.path,
-                    f"{key}.where",
-                    f"unknown boundary part {where!r}; known parts: {known}",
-                )
-            return where
-        arr = np.asarray(where)
-        if arr.min() < 0 or arr.max() >= mesh.n_points:
-            raise SceneError(
-                self.path, f"{key}.where", f"node indices must lie in [0, {mesh.n_points})"
-            )
-        return arr
-
-    def build_supports(self, mesh) -> list:
-        from .loads import Fix
-
-        out = []
-        for i, s in enumerate(self.data["supports"]):
-            out.append(Fix(self._nodes(mesh, s, f"supports[{i}]"), x=s["x"], y=s["y"]))
-        return out
-
-    def build_loads(self, mesh) -> list:
-        from .loads import BodyForce, PointLoad, Traction
-
-        out = []
-        for i, ld in enumerate(self.data["loads"]):
-            key = f"loads[{i}]"
-            if ld["type"] == "body":
-                out.append(BodyForce(tuple(ld["value"])))
-            elif ld["type"] == "traction":
-                out.append(Traction(self._nodes(mesh, ld, key), tuple(ld["value"])))
-            else:
-                out.append(PointLoad(self._nodes(mesh, ld, key), tuple(ld["value"])))
-        return out
-
-    def solve_options(self) -> dict:
-        s = self.data["solver"]
-        return {
-            "solver": s["type"],
-            "nonlinear": s["nonlinear"],
-            "steps": s["steps"],
-            "rtol": s["rtol"],
-            "newton_rtol": s["newton_rtol"],
-            "max_iter": s["max_iter"],
-            "allow_unstable": s["allow_unstable"],
-            "best_effort": s["best_effort"],
-        }
 
 
 def reference_markdown() -> str:

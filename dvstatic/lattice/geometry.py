@@ -15,19 +15,17 @@ from __future__ import annotations
 
 import logging
 import time
-import weakref
 from dataclasses import dataclass
 
 import numpy as np
 
+from .._cache import PerObject
+from ..mesh import Mesh
 from .kinematics import edge_frames
-from .mesh import Mesh
 
 log = logging.getLogger(__name__)
 
 __all__ = ["Geometry", "of", "is_cached"]
-
-_CACHE: weakref.WeakKeyDictionary[Mesh, Geometry] = weakref.WeakKeyDictionary()
 
 #: a half side larger than this many times its bond flags a near-degenerate triangle
 SLIVER_WARNING = 1e3
@@ -46,10 +44,10 @@ class Geometry:
     tri_r : (M, 3) signed half side of local edge k in its triangle
     tri_l : (M, 3) length of local edge k
     tri_weight : (M, 3) 1 / (number of triangles of the bond of local edge k)
-    length : (E,) bond lengths l
-    direction : (E, 2) unit bond directions n (from O to A)
-    half_sides : (E, 2) signed half sides r_T1, r_T2 (0 where a bond has one triangle)
-    r : (E,) dual Voronoi side length r = r_T1 + r_T2
+    length : (n_bonds,) bond lengths l
+    direction : (n_bonds, 2) unit bond directions n (from O to A)
+    half_sides : (n_bonds, 2) signed half sides r_T1, r_T2 (0 where a bond has one triangle)
+    r : (n_bonds,) dual Voronoi side length r = r_T1 + r_T2
     cell_area : (N,) Voronoi cell area of each node (sum of l r / 4 over its bonds);
         sums to the mesh area
     dual_area : (N,) one third of the area of the node's triangles (always positive)
@@ -74,18 +72,14 @@ class Geometry:
 
 def is_cached(mesh: Mesh) -> bool:
     """True if the geometry of ``mesh`` has already been computed."""
-    return mesh in _CACHE
+    return mesh in _GEOMETRY
 
 
 def of(mesh: Mesh) -> Geometry:
     """Geometry of ``mesh`` (computed on first use, then cached for the mesh's lifetime)."""
     if not isinstance(mesh, Mesh):
         raise TypeError(f"expected a dvstatic Mesh, got {type(mesh).__name__}")
-    g = _CACHE.get(mesh)
-    if g is None:
-        g = _compute(mesh)
-        _CACHE[mesh] = g
-    return g
+    return _GEOMETRY(mesh)
 
 
 def _compute(mesh: Mesh) -> Geometry:
@@ -153,3 +147,6 @@ def _compute(mesh: Mesh) -> Geometry:
             worst,
         )
     return g
+
+
+_GEOMETRY = PerObject("geometry", _compute)

@@ -1,0 +1,43 @@
+"""Micro-parameters ``k_n`` and ``nu_m`` from the macroscopic E and nu.
+
+* ``"paper"`` (:mod:`.paper`): the paper's closed form under affine strain
+  (eqs. 9-10 for DV, 19-20 for RV with derived RV moments);
+* ``"relaxed"`` (:mod:`.relaxed`): matches E and nu of the equilibrium (non-affinely
+  relaxed) response of a periodic sample with the mesh's bond-length spread.
+"""
+
+from .base import CALIBRATIONS, MicroParameters, Moments
+from .paper import (
+    admissible_nu,
+    moment_sums,
+    moments,
+    moments_from_sums,
+    paper,
+    paper_from_moments,
+)
+from .relaxed import (
+    REV_POINTS,
+    SPREAD_STEP,
+    interior_spread,
+    relaxed,
+    relaxed_moduli,
+    rev_for_spread,
+)
+
+__all__ = [
+    "CALIBRATIONS",
+    "MicroParameters",
+    "Moments",
+    "admissible_nu",
+    "moment_sums",
+    "moments",
+    "moments_from_sums",
+    "paper",
+    "paper_from_moments",
+    "REV_POINTS",
+    "SPREAD_STEP",
+    "interior_spread",
+    "relaxed",
+    "relaxed_moduli",
+    "rev_for_spread",
+]

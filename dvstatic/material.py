@@ -1,0 +1,70 @@
+"""Plane elasticity laws and the Mandel tensor form (no dependency on meshes).
+
+Stress/strain matrices follow the paper's eq. (6): Mandel vectors
+``[s11, s22, sqrt(2) s12]``, so that ``sigma = C eps`` holds with
+``eps = [e11, e22, sqrt(2) e12]``; plane stress then reads
+``E/(1-nu^2) [[1, nu, 0], [nu, 1, 0], [0, 0, 1-nu]]``. (The paper prints the shear
+entry as ``(1-nu)/2``, i.e. ``C1212``, half the Mandel entry.)
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._checks import check_positive, check_real
+from .errors import InputError
+
+__all__ = [
+    "SQ2",
+    "to_mandel",
+    "plane_stress_tensor",
+    "lame_plane_stress",
+    "check_poisson",
+    "plane_stress_from_strain",
+]
+
+SQ2 = np.sqrt(2.0)
+
+
+def check_poisson(nu, name: str = "nu") -> float:
+    """A Poisson's ratio in the plane-stress range ``-1 < nu < 1``."""
+    v = check_real(name, nu)
+    if not -1.0 < v < 1.0:
+        raise InputError(f"{name} must lie in the plane-stress range -1 < nu < 1, got {v}", name)
+    return v
+
+
+def to_mandel(sigma: np.ndarray) -> np.ndarray:
+    """Mandel vector(s) ``[s11, s22, sqrt(2) s12]`` of (..., 2, 2) tensors, shape (..., 3)."""
+    s = np.asarray(sigma, dtype=float)
+    return np.stack(
+        [s[..., 0, 0], s[..., 1, 1], SQ2 * 0.5 * (s[..., 0, 1] + s[..., 1, 0])], axis=-1
+    )
+
+
+def plane_stress_tensor(E: float, nu: float) -> np.ndarray:
+    """Plane-stress elasticity matrix in Mandel form, shape (3, 3) (units of E)."""
+    E = check_positive("E", E)
+    nu = check_poisson(nu)
+    c = E / (1.0 - nu**2)
+    return c * np.array([[1.0, nu, 0.0], [nu, 1.0, 0.0], [0.0, 0.0, 1.0 - nu]])
+
+
+def lame_plane_stress(E: float, nu: float) -> tuple[float, float]:
+    """Plane-stress Lame constants ``lambda* = E nu / (1 - nu^2)``, ``mu = E / (2 (1 + nu))``.
+
+    (scikit-fem's ``lame_parameters`` returns the plane-strain / 3-D ``lambda``.)
+    """
+    E = check_positive("E", E)
+    nu = check_poisson(nu)
+    return E * nu / (1.0 - nu**2), E / (2.0 * (1.0 + nu))
+
+
+def plane_stress_from_strain(eps: np.ndarray, E: float, nu: float) -> np.ndarray:
+    """Plane-stress law applied to strains ``eps`` of shape (..., 2, 2), same shape."""
+    c = E / (1 - nu**2)
+    s = np.empty_like(eps)
+    s[..., 0, 0] = c * (eps[..., 0, 0] + nu * eps[..., 1, 1])
+    s[..., 1, 1] = c * (eps[..., 1, 1] + nu * eps[..., 0, 0])
+    s[..., 0, 1] = s[..., 1, 0] = E / (1 + nu) * 0.5 * (eps[..., 0, 1] + eps[..., 1, 0])
+    return s

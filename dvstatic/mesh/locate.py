@@ -1,0 +1,70 @@
+"""Locating points in a mesh and interpolating nodal fields there (P1)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import InputError
+from .core import Mesh
+
+__all__ = ["interpolate"]
+
+
+def interpolate(mesh: Mesh, field, points) -> np.ndarray:
+    """Linear (P1) interpolation of a nodal field at arbitrary points inside the mesh.
+
+    Parameters
+    ----------
+    mesh : Mesh
+    field : array_like, shape (N,) or (N, k)
+        Nodal values (e.g. ``sol.u``).
+    points : array_like, shape (n, 2)
+
+    Returns
+    -------
+    ndarray, shape (n,) or (n, k)
+
+    Raises
+    ------
+    InputError
+        If a point lies outside the mesh.
+    """
+    from scipy.spatial import cKDTree
+
+    f = np.asarray(field, dtype=float)
+    p = np.atleast_2d(np.asarray(points, dtype=float))
+    if p.ndim != 2 or p.shape[1] != 2:
+        raise InputError(f"points must have shape (n, 2), got {p.shape}", "points")
+    if f.shape[0] != mesh.n_points:
+        raise InputError(f"field must have {mesh.n_points} rows, got {f.shape[0]}", "field")
+    x = mesh.triangle_coordinates()
+    tree = cKDTree(x.mean(axis=1))
+    tri_idx = np.full(len(p), -1)
+    bary = np.zeros((len(p), 3))
+    todo = np.arange(len(p))
+    k = min(8, mesh.n_triangles)
+    while todo.size:
+        _, cand = tree.query(p[todo], k=k)
+        cand = cand.reshape(len(todo), -1)
+        a = x[cand, 1] - x[cand, 0]
+        b = x[cand, 2] - x[cand, 0]
+        q = p[todo, None, :] - x[cand, 0]
+        det = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+        l1 = (q[..., 0] * b[..., 1] - q[..., 1] * b[..., 0]) / det
+        l2 = (a[..., 0] * q[..., 1] - a[..., 1] * q[..., 0]) / det
+        lam = np.stack([1 - l1 - l2, l1, l2], axis=-1)
+        inside = np.all(lam >= -1e-10, axis=-1)
+        found = inside.any(axis=1)
+        j = np.argmax(inside, axis=1)
+        rows = np.flatnonzero(found)
+        tri_idx[todo[rows]] = cand[rows, j[rows]]
+        bary[todo[rows]] = lam[rows, j[rows]]
+        todo = todo[~found]
+        if k >= mesh.n_triangles:
+            break
+        k = min(4 * k, mesh.n_triangles)
+    if np.any(tri_idx < 0):
+        bad = p[tri_idx < 0][0]
+        raise InputError(f"point {bad.tolist()} lies outside the mesh", "points")
+    vals = f[mesh.triangles[tri_idx]]  # (n, 3, ...)
+    return np.einsum("nv,nv...->n...", bary, vals)

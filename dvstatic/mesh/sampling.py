@@ -1,0 +1,122 @@
+"""Random point moves and periodic Delaunay triangulation (the pieces generators and
+:meth:`Mesh.perturbed <dvstatic.mesh.Mesh.perturbed>` share)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._planar import cross
+from ..errors import InputError
+from .domain import Circle, Domain, Polygon
+from .topology import build_topology
+
+__all__ = ["unit_disc", "move_in_domain", "periodic_delaunay"]
+
+
+def unit_disc(rng: np.random.Generator, n: int) -> np.ndarray:
+    """n points uniformly distributed in the unit disc."""
+    r = np.sqrt(rng.random(n))
+    t = 2 * np.pi * rng.random(n)
+    return np.c_[r * np.cos(t), r * np.sin(t)]
+
+
+def move_in_domain(domain: Domain, p: np.ndarray, amplitude: float, rng, tol: float) -> np.ndarray:
+    """Random moves of points generated in ``domain``: interior points by up to
+    ``amplitude`` in a random direction (kept inside, off the boundary), boundary points
+    along their curve by up to ``amplitude``; corners stay. Returns the moved copy."""
+    p = p.copy()
+    dist, names = domain.curve_distances(p)
+    on = dist <= tol
+    n_on = on.sum(axis=1)
+    corners = domain.corners()
+    is_corner = n_on >= 2
+    if len(corners):
+        dc = np.min(
+            np.hypot(p[:, None, 0] - corners[None, :, 0], p[:, None, 1] - corners[None, :, 1]),
+            axis=1,
+        )
+        is_corner |= dc <= tol
+    curves = []
+    for loop in domain.loops:
+        if isinstance(loop, Polygon):
+            curves.extend(("seg", a, b) for _, a, b in loop.curves())
+        else:
+            curves.append(("circle", loop, None))
+    interior = n_on == 0
+    # boundary nodes: slide along their curve
+    for c, (kind, a, b) in enumerate(curves):
+        sel = np.flatnonzero(on[:, c] & ~is_corner & (n_on == 1))
+        if sel.size == 0:
+            continue
+        s = (rng.random(sel.size) * 2 - 1) * amplitude
+        if kind == "seg":
+            t = (b - a) / np.hypot(*(b - a))
+            length = np.hypot(*(b - a))
+            u = np.einsum("ij,j->i", p[sel] - a, t) + s
+            u = np.clip(u, 0.05 * amplitude, length - 0.05 * amplitude)
+            p[sel] = a + u[:, None] * t
+        else:
+            circ: Circle = a
+            cc = np.asarray(circ.center)
+            ang = np.arctan2(p[sel, 1] - cc[1], p[sel, 0] - cc[0]) + s / circ.radius
+            p[sel] = cc + circ.radius * np.c_[np.cos(ang), np.sin(ang)]
+    idx = np.flatnonzero(interior)
+    for _ in range(8):
+        if idx.size == 0:
+            break
+        trial = p[idx] + unit_disc(rng, idx.size) * amplitude
+        d, _ = domain.curve_distances(trial)
+        good = domain.contains(trial) & (d.min(axis=1) > 0.05 * amplitude)
+        p[idx[good]] = trial[good]
+        idx = idx[~good]
+    return p
+
+
+def periodic_delaunay(p: np.ndarray, period: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Delaunay triangulation of points in a periodic box.
+
+    Points are copied across the box sides within a margin, triangulated, and the
+    triangles whose centroid lies in the box are kept, each once.
+
+    Returns
+    -------
+    triangles : ndarray of int, shape (M, 3)
+    images : ndarray of int, shape (M, 3, 2)
+        Periodic image of every triangle vertex.
+    """
+    from scipy.spatial import Delaunay
+
+    n = len(p)
+    margin = min(1.0, 4.0 * np.sqrt(np.log(n + 2.0) / n))
+    while True:
+        offs = np.array([(i, j) for i in (-1, 0, 1) for j in (-1, 0, 1)])
+        allp, ids, img = [], [], []
+        for o in offs:
+            q = p + o * period
+            keep = np.all((q >= -margin * period) & (q < (1 + margin) * period), axis=1)
+            allp.append(q[keep])
+            ids.append(np.flatnonzero(keep))
+            img.append(np.broadcast_to(o, (int(keep.sum()), 2)))
+        allp = np.vstack(allp)
+        ids = np.concatenate(ids)
+        img = np.vstack(img)
+        tri = Delaunay(allp).simplices
+        c = allp[tri].mean(axis=1)
+        keep = np.all((c >= 0) & (c < period), axis=1)
+        tri = tri[keep]
+        x = allp[tri]
+        a2 = cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])
+        tri[a2 < 0] = tri[a2 < 0][:, [0, 2, 1]]
+        area = 0.5 * np.abs(a2).sum()
+        ok = abs(area - period.prod()) <= 1e-9 * period.prod()
+        if ok:
+            try:
+                t, im = ids[tri], img[tri]
+                build_topology(t, n, im)
+                order = np.argsort(t.min(axis=1), kind="stable")
+                return t[order], im[order]
+            except InputError:
+                ok = False
+        if margin >= 1.0:
+            raise InputError("could not build a periodic triangulation of these points", "points")
+        margin = min(1.0, 2 * margin)

@@ -1,0 +1,164 @@
+"""A validated scene turned into a mesh, a model, supports, loads and solver options."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import CalibrationError, InputError
+from ..io import read_mesh
+from ..lattice import DV, RV
+from ..mesh import generators as meshgen
+from ..mesh.domain import Circle, Domain, Polygon, rectangle_domain
+from ..problem import BodyForce, Fix, PointLoad, Traction
+from .schema import SOLVER_KEYS, SceneError
+
+__all__ = ["Scene"]
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A validated scene: ``data`` holds every key with its default filled in."""
+
+    path: Path
+    data: dict
+
+    @property
+    def name(self) -> str:
+        return self.data["output"]["name"] or self.path.stem
+
+    def _err(self, key: str, exc: Exception) -> SceneError:
+        return SceneError(self.path, key, str(exc))
+
+    def build_mesh(self):
+        """The mesh described by ``[mesh]``."""
+        m = self.data["mesh"]
+        if m["type"] == "file":
+            return self._read_mesh(m["path"])
+        holes = [self._hole(i, h) for i, h in enumerate(m["holes"])]
+        common = {"kind": m["kind"], "jitter": m["jitter"], "seed": m["seed"]}
+        try:
+            if m["type"] == "rectangle" and not holes:
+                return meshgen.rectangle(m["width"], m["height"], m["h"], **common)
+            domain = Domain(self._outer(m), tuple(holes))
+            return meshgen.generate(domain, m["h"], **common)
+        except InputError as exc:
+            raise self._err(_MESH_KEYS.get(exc.param, "mesh"), exc) from None
+
+    def _read_mesh(self, path: str):
+        p = Path(path)
+        if not p.is_absolute():
+            p = self.path.parent / p
+        if not p.is_file():
+            raise SceneError(self.path, "mesh.path", f"mesh file not found: {p}")
+        try:
+            return read_mesh(p)
+        except InputError as exc:
+            raise self._err("mesh.path", exc) from None
+
+    def _hole(self, i: int, h: dict):
+        try:
+            if h["type"] == "circle":
+                return Circle(tuple(h["center"]), h["radius"], h["name"])
+            return Polygon(np.asarray(h["vertices"]), (h["name"],) * len(h["vertices"]))
+        except (InputError, TypeError) as exc:
+            raise self._err(f"mesh.holes[{i}]", exc) from None
+
+    def _outer(self, m: dict):
+        if m["type"] == "rectangle":
+            return rectangle_domain(m["width"], m["height"]).outer
+        if m["type"] == "polygon":
+            v = np.asarray(m["vertices"])
+            names = m["names"] or [f"edge{i}" for i in range(len(v))]
+            if len(names) != len(v):
+                raise SceneError(
+                    self.path, "mesh.names", f"{len(names)} names for {len(v)} polygon edges"
+                )
+            return Polygon(v, tuple(names))
+        return Circle(tuple(m["center"]), m["radius"], "boundary")
+
+    def build_model(self, mesh):
+        """The DV or RV model of ``[model]`` and ``[material]``."""
+        cls = DV if self.data["model"]["type"] == "DV" else RV
+        mat = self.data["material"]
+        try:
+            return cls(
+                mesh,
+                mat["E"],
+                mat["nu"],
+                calibration=self.data["model"]["calibration"],
+                bonds=self.data["model"]["bonds"],
+            )
+        except CalibrationError as exc:
+            raise self._err("material.nu", exc) from None
+        except InputError as exc:
+            raise self._err(_MODEL_KEYS.get(exc.param, "material"), exc) from None
+
+    def _nodes(self, mesh, item: dict, key: str):
+        if item.get("at") is not None:
+            d = np.hypot(*(mesh.points - np.asarray(item["at"])).T)
+            return np.array([int(np.argmin(d))])
+        where = item["where"]
+        if isinstance(where, str):
+            if where not in mesh.parts:
+                known = ", ".join(repr(k) for k in mesh.parts) or "none"
+                raise SceneError(
+                    self.path,
+                    f"{key}.where",
+                    f"unknown boundary part {where!r}; known parts: {known}",
+                )
+            return where
+        arr = np.asarray(where)
+        if arr.min() < 0 or arr.max() >= mesh.n_points:
+            raise SceneError(
+                self.path, f"{key}.where", f"node indices must lie in [0, {mesh.n_points})"
+            )
+        return arr
+
+    def build_supports(self, mesh) -> list:
+        out = []
+        for i, s in enumerate(self.data["supports"]):
+            out.append(Fix(self._nodes(mesh, s, f"supports[{i}]"), x=s["x"], y=s["y"]))
+        return out
+
+    def build_loads(self, mesh) -> list:
+        out = []
+        for i, ld in enumerate(self.data["loads"]):
+            key = f"loads[{i}]"
+            if ld["type"] == "body":
+                out.append(BodyForce(tuple(ld["value"])))
+            elif ld["type"] == "traction":
+                out.append(Traction(self._nodes(mesh, ld, key), tuple(ld["value"])))
+            else:
+                out.append(PointLoad(self._nodes(mesh, ld, key), tuple(ld["value"])))
+        return out
+
+    def solve_options(self) -> dict:
+        """Keyword options of :func:`dvstatic.solve` from ``[solver]``."""
+        s = self.data["solver"]
+        return {name: s[key] for key, name in SOLVER_KEYS.items()}
+
+
+#: scene key of the mesh generator's arguments (InputError.param -> key path)
+_MESH_KEYS = {
+    "h": "mesh.h",
+    "kind": "mesh.kind",
+    "jitter": "mesh.jitter",
+    "seed": "mesh.seed",
+    "width": "mesh.width",
+    "height": "mesh.height",
+    "vertices": "mesh.vertices",
+    "names": "mesh.names",
+    "radius": "mesh.radius",
+    "center": "mesh.center",
+    "holes": "mesh.holes",
+}
+#: scene key of the model's arguments
+_MODEL_KEYS = {
+    "E": "material.E",
+    "nu": "material.nu",
+    "calibration": "model.calibration",
+    "bonds": "model.bonds",
+}

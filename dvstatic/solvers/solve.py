@@ -1,0 +1,265 @@
+"""Static solves: :func:`solve` (linear, Newton, dynamic relaxation, or an engine)."""
+
+from __future__ import annotations
+
+import inspect
+import logging
+import time
+
+import numpy as np
+
+from ..errors import ConvergenceError, InputError
+from ..lattice import VoronoiModel
+from ..lattice import geometry as _geometry
+from ..lattice.stress import check_model
+from ..linalg import AUTO_DIRECT_MAX_DOF
+from ..problem import check_restrained, constraints, load_vector
+from . import backends
+from .linear import solve_linear
+from .newton import SerialProblem, solve_nonlinear
+from .options import SolveOptions, options_docstring
+from .relaxation import dynamic_relaxation
+from .result import Solution, SolveInfo, Timings
+from .tangent import tangent_solver
+
+log = logging.getLogger(__name__)
+
+__all__ = ["solve"]
+
+
+def _listify(items) -> list:
+    """None, one item, or a list/tuple of items, as a list."""
+    if isinstance(items, (list, tuple)):
+        return list(items)
+    return [] if items is None else [items]
+
+
+def solve(model: VoronoiModel, supports=None, loads=None, *, options=None, **kwargs) -> Solution:
+    check_model(model)
+    opts = SolveOptions.from_kwargs(options, **kwargs)
+    if model.mesh.is_periodic:
+        raise InputError(
+            "solve() needs a bounded mesh; use homogenize() on periodic meshes", "mesh"
+        )
+    supports_l, loads_l = _listify(supports), _listify(loads)
+    if opts.solver == "petsc":
+        return backends.engine("petsc").solve(model, supports_l, loads_l, opts)
+    try:
+        return _solve_serial(model, supports_l, loads_l, opts)
+    except ConvergenceError as exc:
+        if not opts.best_effort or exc.state is None:
+            raise
+        return _unconverged(model, supports_l, loads_l, exc, opts)
+
+
+class _Problem:
+    """Supports and loads turned into dofs, values and forces, with stage timings."""
+
+    def __init__(self, model: VoronoiModel, supports: list, loads: list):
+        self.t_start = time.perf_counter()
+        mesh = model.mesh
+        self.dofs, self.values = constraints(mesh, supports)
+        check_restrained(mesh.points, self.dofs)
+        self.f = load_vector(mesh, loads)
+        self.reused: list[str] = []
+        t0 = time.perf_counter()
+        if _geometry.is_cached(mesh):
+            self.reused.append("geometry")
+        _ = model.geometry
+        self.t_geometry = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        if model.is_assembled:
+            self.reused.append("assembly")
+        self.K = model.stiffness("bsr")
+        self.t_assembly = time.perf_counter() - t0
+
+    def reactions(self, r_full: np.ndarray) -> np.ndarray:
+        """Support reactions (N, 2) from the full residual ``f_int - f``."""
+        out = np.zeros_like(r_full)
+        out[self.dofs] = r_full[self.dofs]
+        return out.reshape(-1, 2)
+
+    def timings(self, **stages) -> Timings:
+        return Timings(
+            geometry=self.t_geometry,
+            assembly=self.t_assembly,
+            total=time.perf_counter() - self.t_start,
+            **stages,
+        )
+
+
+def _solve_serial(model: VoronoiModel, supports: list, loads: list, opts) -> Solution:
+    p = _Problem(model, supports, loads)
+    n = p.K.shape[0]
+    kind = opts.solver
+    if kind == "auto":
+        kind = "direct" if n <= AUTO_DIRECT_MAX_DOF else "amg"
+    common = dict(
+        n_dof=n,
+        n_constrained=int(p.dofs.size),
+        converged=True,
+        coupling_assembled=model.operator.has_coupling,
+        nonlinear=opts.nonlinear,
+    )
+    if kind == "dynamic-relaxation":
+        x, r_full, info = _relax(model, p, opts, common)
+    elif opts.nonlinear:
+        x, r_full, info = _newton(model, p, opts, kind, common)
+    else:
+        x, r_full, info = _linear(model, p, opts, kind, common, supports)
+    log.info(
+        "%s %s solve: %d dof, %d iterations, residual %.2e, %.3f s",
+        model.kind,
+        info.solver,
+        n,
+        info.iterations,
+        info.residual,
+        info.seconds.total,
+    )
+    return Solution(model, x.reshape(-1, 2), p.reactions(r_full), info, supports, loads)
+
+
+def _relax(model: VoronoiModel, p: _Problem, opts, common: dict):
+    t0 = time.perf_counter()
+    x, rep = dynamic_relaxation(
+        model, p.dofs, p.values, p.f, opts.rtol, opts.linear_maxiter(), opts.nonlinear
+    )
+    r_full = _internal(model, x, p.K, opts.nonlinear) - p.f
+    info = SolveInfo(
+        "dynamic-relaxation",
+        iterations=rep.iterations,
+        residuals=rep.residuals,
+        residual=rep.residual,
+        seconds=p.timings(solve=time.perf_counter() - t0),
+        reused=tuple(p.reused),
+        damping=rep.damping,
+        **common,
+    )
+    return x, r_full, info
+
+
+def _newton(model: VoronoiModel, p: _Problem, opts, kind: str, common: dict):
+    t0 = time.perf_counter()
+    problem = SerialProblem(model, p.dofs, p.values, p.f, tangent_solver(kind, model.mesh))
+    x, rep = solve_nonlinear(problem, opts, kind)
+    r_full = _internal(model, x, p.K, True) - p.f
+    info = SolveInfo(
+        kind,
+        iterations=rep.iterations,
+        residuals=tuple(r for st in rep.steps for r in st.residuals),
+        residual=rep.residual,
+        seconds=p.timings(solve=time.perf_counter() - t0),
+        reused=tuple(p.reused),
+        steps=rep.steps,
+        cutbacks=rep.cutbacks,
+        tangent_builds=rep.tangent_builds,
+        **common,
+    )
+    return x, r_full, info
+
+
+def _linear(model: VoronoiModel, p: _Problem, opts, kind: str, common: dict, supports):
+    x, rep = solve_linear(model, kind, p.dofs, p.values, p.f, opts, supports)
+    reused = list(p.reused)
+    if rep.reused:
+        reused.append("factorisation" if kind == "direct" else "amg hierarchy")
+    info = SolveInfo(
+        kind,
+        iterations=rep.iterations,
+        residuals=rep.residuals,
+        residual=rep.residual,
+        seconds=p.timings(setup=rep.setup_seconds, solve=rep.solve_seconds),
+        reused=tuple(reused),
+        stability=rep.stability,
+        backward_error=rep.backward_error,
+        **common,
+    )
+    return x, p.K @ x - p.f, info
+
+
+def _internal(model: VoronoiModel, x: np.ndarray, K, nonlinear: bool) -> np.ndarray:
+    return model.internal_force(x.reshape(-1, 2)) if nonlinear else K @ x
+
+
+def _unconverged(model, supports: list, loads: list, exc: ConvergenceError, opts) -> Solution:
+    """The last state of a failed iteration, marked unconverged (best effort)."""
+    mesh = model.mesh
+    dofs, _ = constraints(mesh, supports)
+    f = exc.load_factor * load_vector(mesh, loads)
+    x = np.asarray(exc.state, dtype=float).reshape(-1)
+    r_full = _internal(model, x, model.stiffness("bsr"), opts.nonlinear) - f
+    reactions = np.zeros_like(x)
+    reactions[dofs] = r_full[dofs]
+    prior = exc.info if isinstance(exc.info, dict) else {}
+    steps = tuple(prior.get("steps", ()))
+    kind = opts.solver
+    if kind == "auto":
+        kind = "direct" if 2 * mesh.n_points <= AUTO_DIRECT_MAX_DOF else "amg"
+    free = np.ones(x.size, dtype=bool)
+    free[dofs] = False
+    scale = max(float(np.linalg.norm(f)), float(np.linalg.norm(r_full[dofs])), 1e-300)
+    info = SolveInfo(
+        kind,
+        nonlinear=opts.nonlinear,
+        converged=False,
+        n_dof=x.size,
+        n_constrained=int(dofs.size),
+        iterations=int(sum(s.iterations for s in steps)),
+        residual=float(np.linalg.norm(r_full[free])) / scale,
+        steps=steps,
+        cutbacks=int(prior.get("cutbacks", 0)),
+        load_factor=exc.load_factor,
+        failure=str(exc),
+        failed_step=prior.get("failed_step"),
+    )
+    log.warning("best effort: returning an unconverged state (%s)", exc)
+    return Solution(model, x.reshape(-1, 2), reactions.reshape(-1, 2), info, supports, loads)
+
+
+def _signature() -> inspect.Signature:
+    params = [
+        inspect.Parameter("model", inspect.Parameter.POSITIONAL_OR_KEYWORD),
+        inspect.Parameter("supports", inspect.Parameter.POSITIONAL_OR_KEYWORD, default=None),
+        inspect.Parameter("loads", inspect.Parameter.POSITIONAL_OR_KEYWORD, default=None),
+        inspect.Parameter("options", inspect.Parameter.KEYWORD_ONLY, default=None),
+    ]
+    defaults = SolveOptions()
+    for name in SolveOptions.__dataclass_fields__:
+        params.append(
+            inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=getattr(defaults, name))
+        )
+    return inspect.Signature(params, return_annotation=Solution)
+
+
+solve.__signature__ = _signature()
+solve.__doc__ = f"""Solve the static problem: linear ``K u = f`` or geometrically exact equilibrium.
+
+    Parameters
+    ----------
+    model : DV or RV
+    supports : Fix or list of Fix
+        Must prevent all rigid-body motion.
+    loads : Traction, BodyForce, PointLoad or a list of them
+    options : SolveOptions, optional
+        All options at once; keywords given as well override it.
+{options_docstring()}
+
+    Returns
+    -------
+    Solution
+        ``u``, ``reactions`` and the typed report ``info`` (:class:`SolveInfo`).
+
+    Raises
+    ------
+    InputError (a ValueError)
+        Bad input, or supports that leave a rigid-body motion free.
+    UnstableError (a SolverError)
+        The stiffness (or a converged Newton state) is not positive definite.
+    SingularError (a SolverError)
+        The system is singular or badly conditioned.
+    ConvergenceError (a SolverError)
+        An iteration did not converge (AMG limit, a load step failing after every
+        cut-back); with ``best_effort`` the last state is returned instead.
+    MissingDependencyError (an ImportError)
+        ``solver="petsc"`` without petsc4py.
+    """
