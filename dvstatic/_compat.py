@@ -14,7 +14,7 @@ import sys
 import types
 import warnings
 
-__all__ = ["MOVED", "install"]
+__all__ = ["MOVED", "RENAMED", "install"]
 
 #: old module -> new module
 MOVED = {
@@ -33,6 +33,11 @@ MOVED = {
     "dvstatic.distributed": "dvstatic.parallel.partition",
     "dvstatic.petsc_solve": "dvstatic.parallel.petsc",
 }
+#: names that moved to another name or module: (old module, name) -> "module:name"
+RENAMED = {
+    ("dvstatic.petsc_solve", "solve_petsc"): "dvstatic.parallel.petsc:solve",
+    ("dvstatic.meshgen", "spatial_order"): "dvstatic.mesh.ordering:spatial_order",
+}
 #: old modules whose name is also a public function of ``dvstatic`` (calling the
 #: module calls it, so that ``dv.stability(...)`` survives ``import dvstatic.stability``)
 _CALLABLE = {"dvstatic.stability": "stability"}
@@ -49,6 +54,10 @@ class _Alias(types.ModuleType):
         return importlib.import_module(self.__dict__["_target"])
 
     def __getattr__(self, attr: str):
+        moved = RENAMED.get((self.__name__, attr))
+        if moved is not None:
+            module, name = moved.split(":")
+            return getattr(importlib.import_module(module), name)
         return getattr(self._module(), attr)
 
     def __dir__(self):
@@ -69,7 +78,7 @@ class _Loader(importlib.abc.Loader):
         warnings.warn(
             f"{module.__name__} is deprecated; import {MOVED[module.__name__]} instead",
             DeprecationWarning,
-            stacklevel=3,
+            stacklevel=2,
         )
 
 

@@ -1,6 +1,27 @@
-"""Planar domains with named boundary curves (``dv.domain.Polygon``, ``Circle``,
-``Domain``): the public name of :mod:`dvstatic.mesh.domain`."""
+"""Planar domains with named boundary curves and regions (``dv.domain.Polygon``,
+``Circle``, ``Path`` of ``Line`` / ``Arc`` / ``EllipseArc`` curves, ``Domain``): the
+public name of :mod:`dvstatic.mesh.domain`."""
 
-from .mesh.domain import Circle, Domain, Loop, Polygon, rectangle_domain
+from .mesh.domain import (
+    Arc,
+    Circle,
+    Domain,
+    EllipseArc,
+    Line,
+    Loop,
+    Path,
+    Polygon,
+    rectangle_domain,
+)
 
-__all__ = ["Polygon", "Circle", "Domain", "Loop", "rectangle_domain"]
+__all__ = [
+    "Polygon",
+    "Circle",
+    "Path",
+    "Line",
+    "Arc",
+    "EllipseArc",
+    "Domain",
+    "Loop",
+    "rectangle_domain",
+]

@@ -12,10 +12,11 @@ import numpy as np
 
 from .mesh import Mesh
 
-__all__ = ["figure", "draw_mesh", "draw_deformed", "draw_beam_setup", "save"]
+__all__ = ["pyplot", "figure", "draw_mesh", "draw_deformed", "draw_beam_setup", "save"]
 
 
-def _plt():
+def pyplot():
+    """matplotlib.pyplot, with the Agg backend when no display backend was chosen."""
     import matplotlib
 
     if matplotlib.get_backend().lower() not in ("agg", "pdf", "svg", "ps", "cairo"):
@@ -30,7 +31,7 @@ def _plt():
 
 def figure(ncols: int = 1, nrows: int = 1, size: tuple[float, float] = (8.0, 4.0)):
     """A new figure and its axes."""
-    plt = _plt()
+    plt = pyplot()
     return plt.subplots(nrows, ncols, figsize=size, squeeze=False)
 
 
@@ -63,7 +64,7 @@ def draw_deformed(
     edges: bool = True,
 ):
     """Deformed mesh ``x + scale u`` coloured by a nodal ``field`` (default ``|u|``)."""
-    plt = _plt()
+    plt = pyplot()
     u = np.asarray(u, dtype=float).reshape(-1, 2)
     p = mesh.points + scale * u
     f = np.hypot(u[:, 0], u[:, 1]) if field is None else np.asarray(field, dtype=float)
@@ -135,7 +136,7 @@ def draw_beam_setup(ax, length: float, height: float, body_force: float = -1.0):
 
 def save(fig, path: str | Path, dpi: int = 120) -> Path:
     """Save a figure (written to a temporary name, then renamed) and close it."""
-    plt = _plt()
+    plt = pyplot()
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(path.stem + ".tmp" + path.suffix)

@@ -55,6 +55,8 @@ def main(out: str) -> None:
     arrays, infos = {}, {}
     for i, (problem, model, nonlinear) in enumerate(CASES):
         m, sup, ld = setup(problem, model, nonlinear)
+        if i == 0 and rank == 0:
+            print(m)  # calibrates on rank 0 only: the solve must still agree on all ranks
         sol = dv.solve(m, sup, ld, solver="petsc", nonlinear=nonlinear, **OPTIONS)
         if rank == 0:
             arrays[f"u{i}"] = sol.u

@@ -150,7 +150,7 @@ def test_petsc_refuses_best_effort_and_reports_stages():
         dv.solve(dv.DV(mesh, 1e5, 0.2), sup, ld, solver="petsc", best_effort=True)
     sol = dv.solve(dv.DV(mesh, 1e5, 0.2), sup, ld, solver="petsc")
     for stage in ("partition", "calibration", "assembly", "setup", "solve", "gather", "total"):
-        assert stage in sol.info.seconds
+        assert getattr(sol.info.seconds, stage) > 0.0, stage
     assert sol.info.parallel.ranks == 1
     assert sol.info.iterations <= 30
 

@@ -132,7 +132,7 @@ def plot(data: dict, path) -> None:
             ax.set_yticks(range(len(meshes)), meshes)
             ax.set_xlabel("nu")
             ax.set_title(f"{kind}, {cal} calibration: L2 error [%] (U unstable, - none)")
-            dvplot._plt().colorbar(im, ax=ax, shrink=0.8)
+            dvplot.pyplot().colorbar(im, ax=ax, shrink=0.8)
     fig.suptitle(f"Stability sweep, uniaxial stress, h = {data['h']}")
     dvplot.save(fig, path)
 

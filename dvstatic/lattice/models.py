@@ -26,6 +26,7 @@ import numpy as np
 
 from .._checks import as_displacement, check_choice, check_positive
 from .._env import launched_under_mpi
+from ..errors import InputError
 from ..material import check_poisson
 from ..mesh import Mesh
 from . import calibration
@@ -123,7 +124,7 @@ class VoronoiModel:
             raise TypeError(f"micro must be MicroParameters, got {type(micro).__name__}")
         if self.is_calibrated:
             if self.micro != micro:
-                raise ValueError("the model is calibrated already, with other parameters")
+                raise InputError("the model is calibrated already, with other parameters", "micro")
             return
         self.__dict__["micro"] = micro  # the cached_property's slot
 

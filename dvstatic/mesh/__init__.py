@@ -7,7 +7,7 @@ perturbation and orderings (layer 1: imports only the foundation modules).
 """
 
 from .core import Mesh
-from .domain import Circle, Domain, Polygon, rectangle_domain
+from .domain import Arc, Circle, Domain, EllipseArc, Line, Path, Polygon, rectangle_domain
 from .generators import KINDS, disc, generate, lloyd, polygon, rectangle, with_spread
 from .locate import interpolate
 from .ordering import mesh_dof_order, spatial_order
@@ -20,6 +20,10 @@ __all__ = [
     "Circle",
     "Domain",
     "Polygon",
+    "Path",
+    "Line",
+    "Arc",
+    "EllipseArc",
     "rectangle_domain",
     "KINDS",
     "rectangle",

@@ -47,7 +47,10 @@ class Mesh:
         ``v`` of triangle ``t`` sits at ``points[triangles[t, v]] + images[t, v] * period``.
     domain : Domain, optional
         The domain the points were generated in (used to re-triangulate after
-        :meth:`perturbed`).
+        :meth:`perturbed`, and by the FE reference to keep curved boundaries curved).
+    regions : mapping str -> array_like of int, optional
+        Named regions: the triangles of each (disjoint sets; the other triangles
+        belong to no region). Each region can carry its own material.
 
     Raises
     ------
@@ -65,6 +68,7 @@ class Mesh:
     period: np.ndarray | None = None
     images: np.ndarray | None = None
     domain: Domain | None = None
+    regions: Mapping[str, np.ndarray] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         p = _as_points(self.points)
@@ -135,6 +139,7 @@ class Mesh:
         object.__setattr__(self, "images", images)
         topo = self.topology  # validates edges (manifold, orientation)
         object.__setattr__(self, "parts", types.MappingProxyType(self._checked_parts(topo)))
+        object.__setattr__(self, "regions", types.MappingProxyType(self._checked_regions()))
 
     # ------------------------------------------------------------------ basics
     @property
@@ -271,6 +276,37 @@ class Mesh:
             out[str(name)] = ccw
         return out
 
+    def _checked_regions(self) -> dict[str, np.ndarray]:
+        out: dict[str, np.ndarray] = {}
+        taken = np.zeros(self.n_triangles, dtype=bool)
+        for name, tris in self.regions.items():
+            t = np.asarray(tris)
+            if t.size == 0:
+                t = np.zeros(0, np.int64)
+            if t.ndim != 1 or not np.issubdtype(t.dtype, np.integer):
+                raise InputError(
+                    f"region {name!r} must be a 1-D integer array of triangles", "regions"
+                )
+            if t.size and (t.min() < 0 or t.max() >= self.n_triangles):
+                raise InputError(
+                    f"region {name!r} has triangle indices outside [0, {self.n_triangles})",
+                    "regions",
+                )
+            t = np.unique(t.astype(np.int64))
+            if np.any(taken[t]):
+                raise InputError(f"region {name!r} overlaps another region", "regions")
+            taken[t] = True
+            t.setflags(write=False)
+            out[str(name)] = t
+        return out
+
+    def region_of_triangles(self) -> np.ndarray:
+        """Index of every triangle's region in ``list(mesh.regions)``, -1 for none, (M,)."""
+        out = np.full(self.n_triangles, -1, dtype=np.int64)
+        for k, tris in enumerate(self.regions.values()):
+            out[tris] = k
+        return out
+
     # ------------------------------------------------------------------ transforms
     def perturbed(self, amplitude: float, seed: int | None = 0) -> Mesh:
         """Randomly moved copy of the mesh (the paper's way to raise sigma_L).
@@ -316,13 +352,36 @@ class Mesh:
                 ) from None
         tol = 1e-9 * self.h
         p = move_in_domain(self.domain, p, amplitude, rng, tol)
-        p, tri, parts = self.domain.triangulate(p, tol)
-        return Mesh(p, tri, parts=parts, domain=self.domain)
+        p, tri, parts, regions = self.domain.triangulate(p, tol, segments=self._segments(p))
+        return Mesh(p, tri, parts=parts, regions=regions, domain=self.domain)
+
+    def _segments(self, p: np.ndarray) -> np.ndarray | None:
+        """Region segments at points ``p``: consecutive nodes along every region curve,
+        (s, 3) with the index of the curve both ends lie on."""
+        if self.domain is None or not self.domain.regions:
+            return None
+        tol = 1e-9 * self.h
+        out, k0 = [], 0
+        for loop in self.domain.regions:
+            curves = loop.pieces()
+            d = np.stack([c.distance(p) for c in curves], axis=1) <= tol
+            nodes = np.flatnonzero(d.any(axis=1))
+            k = np.argmax(d[nodes], axis=1)
+            t = np.array(
+                [curves[ki].param(p[n : n + 1])[0] for ki, n in zip(k, nodes, strict=True)]
+            )
+            nodes = nodes[np.lexsort((t, k))]
+            a, b = nodes, np.roll(nodes, -1)
+            both = d[a] & d[b]
+            out.append(np.c_[a, b, k0 + np.argmax(both, axis=1)])
+            k0 += len(curves)
+        return np.vstack(out).astype(np.int64)
 
     def __repr__(self) -> str:
         kind = "periodic " if self.is_periodic else ""
         parts = f", parts={list(self.parts)}" if self.parts else ""
-        return f"Mesh({kind}N={self.n_points}, triangles={self.n_triangles}{parts})"
+        regions = f", regions={list(self.regions)}" if self.regions else ""
+        return f"Mesh({kind}N={self.n_points}, triangles={self.n_triangles}{parts}{regions})"
 
 
 # ---------------------------------------------------------------------- internals

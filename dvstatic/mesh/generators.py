@@ -59,6 +59,7 @@ def rectangle(
     kind: str = "jittered",
     jitter: float = 0.3,
     seed: int | None = 0,
+    regions=(),
 ) -> Mesh:
     """Triangulated rectangle ``[0, width] x [0, height]``.
 
@@ -80,6 +81,10 @@ def rectangle(
         Relative jitter for ``kind="jittered"``, in [0, 0.5).
     seed : int or None
         Random seed.
+    regions : sequence of Polygon, Circle or Path
+        Named regions inside the rectangle (``dv.domain.Circle(c, r, name="inclusion")``,
+        ``dv.domain.Polygon(v, name="layer")``): the triangles conform to their
+        boundaries and ``mesh.regions`` lists their triangles.
 
     Returns
     -------
@@ -103,7 +108,10 @@ def rectangle(
         pts, boundary, side_dir, side_step = _lattice_points(width, height, h)
         if kind == "jittered" and jitter > 0:
             _jitter_rectangle(pts, boundary, side_dir, side_step, width, height, h, jitter, rng)
-    return _triangulated(rectangle_domain(width, height), pts, h, kind)
+    domain = rectangle_domain(width, height)
+    if regions:
+        domain = Domain(domain.outer, (), tuple(regions))
+    return _triangulated(domain, pts, h, kind)
 
 
 def generate(
@@ -129,10 +137,8 @@ def generate(
     Returns
     -------
     Mesh
-        With a part per polygon edge name and per hole name.
+        With a part per boundary curve name and a region per region of the domain.
     """
-    from scipy.spatial import cKDTree
-
     if not isinstance(domain, Domain):
         raise TypeError(f"domain must be a dvstatic Domain, got {type(domain).__name__}")
     h = check_positive("h", h)
@@ -144,31 +150,61 @@ def generate(
             "h",
         )
     kind, jitter, rng = check_sampling(kind, jitter, seed)
-    bnd, seg_a, seg_b = _boundary_points(domain, h)
+    bnd, seg_a, seg_b = _loop_points(domain.loops, h)
     inner = _interior_points(domain, h, "random" if kind == "cvt" else kind, jitter, rng)
-    # Gabriel condition: no interior point inside the diametral circle of a boundary
-    # segment, so that every segment is an edge of the Delaunay triangulation
-    if len(inner):
-        mid = 0.5 * (seg_a + seg_b)
-        half = 0.5 * np.hypot(*(seg_b - seg_a).T)
-        tree = cKDTree(mid)
-        k = min(6, len(mid))
-        dist, idx = tree.query(inner, k=k)
-        dist, idx = dist.reshape(len(inner), k), idx.reshape(len(inner), k)
-        inner = inner[~np.any(dist < half[idx] * (1 + 1e-9), axis=1)]
+    inner = _gabriel(inner, seg_a, seg_b)
     return _triangulated(domain, np.vstack([bnd, inner]), h, kind)
 
 
+def _gabriel(inner: np.ndarray, seg_a: np.ndarray, seg_b: np.ndarray) -> np.ndarray:
+    """Points outside the diametral circle of every segment (Gabriel condition), so
+    that every segment is an edge of the Delaunay triangulation."""
+    from scipy.spatial import cKDTree
+
+    if not len(inner) or not len(seg_a):
+        return inner
+    mid = 0.5 * (seg_a + seg_b)
+    half = 0.5 * np.hypot(*(seg_b - seg_a).T)
+    k = min(6, len(mid))
+    dist, idx = cKDTree(mid).query(inner, k=k)
+    dist, idx = dist.reshape(len(inner), k), idx.reshape(len(inner), k)
+    return inner[~np.any(dist < half[idx] * (1 + 1e-9), axis=1)]
+
+
 def _triangulated(domain: Domain, pts: np.ndarray, h: float, kind: str) -> Mesh:
-    """The mesh of ``pts`` in ``domain``: Morton order, Lloyd iterations for ``cvt``,
-    conforming Delaunay triangulation."""
-    pts = pts[spatial_order(pts)]
+    """The mesh of ``pts`` in ``domain``: region curves added (points near them
+    removed), Morton order, Lloyd iterations for ``cvt``, conforming Delaunay
+    triangulation."""
+    n_fixed = 0
+    if domain.regions:
+        rp, ra, rb = _loop_points(domain.regions, h)
+        far = domain.region_distances(pts).min(axis=1) >= 0.45 * h
+        pts = np.vstack([rp, _gabriel(pts[far], ra, rb)])
+        n_fixed = len(rp)
+    order = np.concatenate([np.arange(n_fixed), n_fixed + spatial_order(pts[n_fixed:])])
+    pts = pts[order]
     if kind == "cvt":
         pts = lloyd(domain, pts, h)
-    pts, tri, parts = domain.triangulate(pts, 1e-9 * h)
-    mesh = Mesh(pts, tri, parts=parts, domain=domain)
+    segments = _region_segments(domain, h) if domain.regions else None
+    pts, tri, parts, regions = domain.triangulate(pts, 1e-9 * h, segments=segments)
+    mesh = Mesh(pts, tri, parts=parts, regions=regions, domain=domain)
     log.debug("generated %s mesh: %r", kind, mesh)
     return mesh
+
+
+def _region_segments(domain: Domain, h: float) -> np.ndarray:
+    """Consecutive region points (the first points of the point list) as segments with
+    the index of their region curve, shape (s, 3)."""
+    out, start, k = [], 0, 0
+    for loop in domain.regions:
+        counts = [len(c.spaced(h)) for c in loop.pieces()]
+        n = sum(counts)
+        ids = start + np.arange(n)
+        curve = k + np.repeat(np.arange(len(counts)), counts)
+        out.append(np.c_[ids, np.roll(ids, -1), curve])
+        start += n
+        k += len(counts)
+    return np.vstack(out).astype(np.int64)
 
 
 def polygon(
@@ -179,8 +215,9 @@ def polygon(
     seed: int | None = 0,
     names=None,
     holes=(),
+    regions=(),
 ) -> Mesh:
-    """Mesh a polygon, optionally with holes.
+    """Mesh a polygon, optionally with holes and regions.
 
     Parameters
     ----------
@@ -191,9 +228,11 @@ def polygon(
     names : sequence of str, optional
         Name of every edge (edge i joins vertex i to vertex i+1); default
         ``"edge0"``, ``"edge1"``, ...
-    holes : sequence of Polygon or Circle
+    holes : sequence of Polygon, Circle or Path
         Hole loops (:class:`dvstatic.domain.Polygon`, :class:`dvstatic.domain.Circle`);
         each gives its part name to its whole boundary.
+    regions : sequence of Polygon, Circle or Path
+        Named regions inside the body (see :func:`rectangle`).
 
     Returns
     -------
@@ -202,7 +241,8 @@ def polygon(
     v = np.asarray(vertices, dtype=float)
     if names is None:
         names = [f"edge{i}" for i in range(len(v))]
-    return generate(Domain(Polygon(v, tuple(names)), tuple(holes)), h, kind, jitter, seed)
+    domain = Domain(Polygon(v, tuple(names)), tuple(holes), tuple(regions))
+    return generate(domain, h, kind, jitter, seed)
 
 
 def disc(
@@ -214,39 +254,35 @@ def disc(
     seed: int | None = 0,
     name: str = "boundary",
     holes=(),
+    regions=(),
 ) -> Mesh:
-    """Mesh a disc (boundary part ``name``), optionally with holes."""
+    """Mesh a disc (boundary part ``name``), optionally with holes and regions."""
     radius = check_positive("radius", radius)
-    return generate(Domain(Circle(center, radius, name), tuple(holes)), h, kind, jitter, seed)
+    domain = Domain(Circle(center, radius, name), tuple(holes), tuple(regions))
+    return generate(domain, h, kind, jitter, seed)
 
 
-def _boundary_points(domain: Domain, h: float):
-    """Points on every curve at spacing about h, and the boundary segments."""
+def _loop_points(loops, h: float):
+    """Points on every curve of ``loops`` at spacing about h, and the segments
+    between consecutive points of each loop (start and end points)."""
     pts, a_list, b_list = [], [], []
-    for loop in domain.loops:
-        if isinstance(loop, Polygon):
-            v = loop.vertices
-            w = np.roll(v, -1, axis=0)
-            loop_pts = []
-            for a, b in zip(v, w, strict=True):
-                n = max(1, int(round(np.hypot(*(b - a)) / h)))
-                t = np.arange(n)[:, None] / n
-                loop_pts.append(a + t * (b - a))
-            lp = np.vstack(loop_pts)
-        else:
-            # a multiple of 4: nodes on the axes through the centre (symmetric loads)
-            n = 4 * max(2, int(round(2 * np.pi * loop.radius / (4 * h))))
-            ang = 2 * np.pi * np.arange(n) / n
-            lp = np.asarray(loop.center) + loop.radius * np.c_[np.cos(ang), np.sin(ang)]
+    for loop in loops:
+        lp = np.vstack([c.spaced(h) for c in loop.pieces()])
         pts.append(lp)
         a_list.append(lp)
         b_list.append(np.roll(lp, -1, axis=0))
+    if not pts:
+        return np.zeros((0, 2)), np.zeros((0, 2)), np.zeros((0, 2))
     return np.vstack(pts), np.vstack(a_list), np.vstack(b_list)
 
 
 def _distance_to_boundary(domain: Domain, p: np.ndarray) -> np.ndarray:
+    """Distance to the nearest boundary or region curve."""
     d, _ = domain.curve_distances(p)
-    return d.min(axis=1)
+    d = d.min(axis=1)
+    if domain.regions:
+        d = np.minimum(d, domain.region_distances(p).min(axis=1))
+    return d
 
 
 def _interior_points(domain: Domain, h: float, kind: str, jitter: float, rng) -> np.ndarray:

@@ -7,7 +7,7 @@ import numpy as np
 
 from .._planar import cross
 from ..errors import InputError
-from .domain import Circle, Domain, Polygon
+from .domain import Domain
 from .topology import build_topology
 
 __all__ = ["unit_disc", "move_in_domain", "periodic_delaunay"]
@@ -22,10 +22,12 @@ def unit_disc(rng: np.random.Generator, n: int) -> np.ndarray:
 
 def move_in_domain(domain: Domain, p: np.ndarray, amplitude: float, rng, tol: float) -> np.ndarray:
     """Random moves of points generated in ``domain``: interior points by up to
-    ``amplitude`` in a random direction (kept inside, off the boundary), boundary points
-    along their curve by up to ``amplitude``; corners stay. Returns the moved copy."""
+    ``amplitude`` in a random direction (kept inside, off the boundary and the region
+    curves), points on a boundary or region curve along it by up to ``amplitude``;
+    corners stay. Returns the moved copy."""
     p = p.copy()
-    dist, names = domain.curve_distances(p)
+    curves = domain.boundary_curves() + domain.region_curves()
+    dist = _all_distances(domain, p)
     on = dist <= tol
     n_on = on.sum(axis=1)
     corners = domain.corners()
@@ -36,40 +38,29 @@ def move_in_domain(domain: Domain, p: np.ndarray, amplitude: float, rng, tol: fl
             axis=1,
         )
         is_corner |= dc <= tol
-    curves = []
-    for loop in domain.loops:
-        if isinstance(loop, Polygon):
-            curves.extend(("seg", a, b) for _, a, b in loop.curves())
-        else:
-            curves.append(("circle", loop, None))
-    interior = n_on == 0
-    # boundary nodes: slide along their curve
-    for c, (kind, a, b) in enumerate(curves):
+    # nodes on a curve: slide along it
+    for c, curve in enumerate(curves):
         sel = np.flatnonzero(on[:, c] & ~is_corner & (n_on == 1))
         if sel.size == 0:
             continue
         s = (rng.random(sel.size) * 2 - 1) * amplitude
-        if kind == "seg":
-            t = (b - a) / np.hypot(*(b - a))
-            length = np.hypot(*(b - a))
-            u = np.einsum("ij,j->i", p[sel] - a, t) + s
-            u = np.clip(u, 0.05 * amplitude, length - 0.05 * amplitude)
-            p[sel] = a + u[:, None] * t
-        else:
-            circ: Circle = a
-            cc = np.asarray(circ.center)
-            ang = np.arctan2(p[sel, 1] - cc[1], p[sel, 0] - cc[0]) + s / circ.radius
-            p[sel] = cc + circ.radius * np.c_[np.cos(ang), np.sin(ang)]
-    idx = np.flatnonzero(interior)
+        p[sel] = curve.slide(p[sel], s, 0.05 * amplitude)
+    idx = np.flatnonzero(n_on == 0)
     for _ in range(8):
         if idx.size == 0:
             break
         trial = p[idx] + unit_disc(rng, idx.size) * amplitude
-        d, _ = domain.curve_distances(trial)
+        d = _all_distances(domain, trial)
         good = domain.contains(trial) & (d.min(axis=1) > 0.05 * amplitude)
         p[idx[good]] = trial[good]
         idx = idx[~good]
     return p
+
+
+def _all_distances(domain: Domain, p: np.ndarray) -> np.ndarray:
+    """Distances to every boundary curve, then every region curve, (n, c)."""
+    d, _ = domain.curve_distances(p)
+    return np.hstack([d, domain.region_distances(p)])
 
 
 def periodic_delaunay(p: np.ndarray, period: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

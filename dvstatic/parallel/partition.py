@@ -25,7 +25,7 @@ How the work is split
 
 What every rank holds: the mesh (points, triangles, its bond topology and parts), the
 node permutation (N integers), and its patch. Use :func:`patch_memory` and
-``sol.info["parallel"]`` for the measured sizes.
+``sol.info.parallel`` for the measured sizes.
 """
 
 from __future__ import annotations
@@ -42,6 +42,7 @@ from ..lattice import geometry as _geometry
 from ..lattice.weights import bond_weights
 from ..mesh import Mesh
 from ..problem import nodal_forces
+from ..solvers import backends
 
 __all__ = [
     "available",
@@ -60,12 +61,8 @@ log = logging.getLogger(__name__)
 
 
 def available() -> bool:
-    """True if petsc4py can be imported."""
-    try:
-        import petsc4py  # noqa: F401
-    except ImportError:
-        return False
-    return True
+    """True if the PETSc engine's dependency (petsc4py) can be imported."""
+    return backends.installed("petsc")
 
 
 def rcb_partition(points: np.ndarray, nparts: int) -> np.ndarray:
@@ -190,11 +187,12 @@ def micro_parameters(model, lay: Layout, allreduce):
 
     ``allreduce`` adds a float array over all ranks (``lambda a: a`` on one process).
     Each bond and triangle is owned by the rank that owns its lowest-numbered node, so
-    the sums over all ranks are the global ones.
+    the sums over all ranks are the global ones. Collective: every rank computes them
+    (unless every rank's model is calibrated already), so that all ranks use the same.
     """
     if isinstance(model.calibration, calibration.MicroParameters):
         return model.calibration
-    if model.is_calibrated:
+    if allreduce(np.array([0.0 if model.is_calibrated else 1.0]))[0] == 0.0:
         return model.micro
     geom = _geometry.of(lay.patch)
     own_b = owned_bonds(lay)

@@ -11,6 +11,7 @@ the command line (``-dvstatic_ksp_monitor``, ``-dvstatic_pc_type hypre``...) win
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import logging
 import time
 from dataclasses import dataclass
@@ -108,8 +109,13 @@ class _System:
         self._load(r, c, v, (nb, hash(ptr.tobytes()), hash(bcol.tobytes())))
 
     def _load(self, r, c, v, pattern) -> None:
+        from mpi4py import MPI
+
         PETSc = self.PETSc
-        if self.A is None or pattern != self.pattern:
+        changed = self.A is None or pattern != self.pattern
+        # a new matrix is a collective operation: every rank must agree
+        if self.comm.tompi4py().allreduce(changed, MPI.LOR):
+            self.close()
             n2 = 2 * self.lay.n_owned
             A = PETSc.Mat().create(comm=self.comm)
             A.setSizes(((n2, PETSc.DECIDE), (n2, PETSc.DECIDE)), bsize=2)
@@ -123,6 +129,13 @@ class _System:
             self.ksp = None
         self.A.setValuesCOO(v, addv=PETSc.InsertMode.INSERT_VALUES)
         self.A.assemble()
+
+    def close(self) -> None:
+        """Destroy the PETSc matrix and solver (collective)."""
+        for obj in (self.ksp, self.A):
+            if obj is not None:
+                obj.destroy()
+        self.ksp = self.A = None
 
     def column_correction(self, g_patch: np.ndarray) -> np.ndarray:
         """``-K[:, prescribed] g`` on the owned rows, for prescribed patch values ``g``."""
@@ -193,6 +206,11 @@ class _Exchange:
         self.to_patch = PETSc.Scatter().create(self.vec, idx, self.local, None)
         self.to_root, self.root = PETSc.Scatter.toZero(self.vec)
 
+    def close(self) -> None:
+        """Destroy the vectors and scatters (collective)."""
+        for obj in (self.to_patch, self.to_root, self.vec, self.local, self.root):
+            obj.destroy()
+
     def patch(self, owned: np.ndarray) -> np.ndarray:
         """Values of the patch dofs, shape (2L,), from the owned pieces on all ranks."""
         P = self.PETSc
@@ -247,7 +265,8 @@ def _prepare(PETSc, comm, model, supports, loads, opts, seconds: dict) -> _Setup
     t0 = time.perf_counter()
     mpi = comm.tompi4py()
     micro = micro_parameters(model, lay, lambda a: mpi.allreduce(np.asarray(a, dtype=float)))
-    model.set_micro(micro)
+    if not model.is_calibrated:
+        model.set_micro(micro)
     seconds["calibration"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     pm = type(model)(lay.patch, model.E, model.nu, calibration=micro, bonds=model.bonds)
@@ -285,19 +304,24 @@ def solve(model, supports: list, loads: list, opts) -> Solution:
     comm = PETSc.COMM_WORLD
     t_start = time.perf_counter()
     seconds: dict[str, float] = {}
+    # progress bars and step logs on rank 0 only
+    opts = dataclasses.replace(opts, progress=opts.progress and comm.getRank() == 0)
     with pushed_options(PETSc):
         s = _prepare(PETSc, comm, model, supports, loads, opts, seconds)
-        if opts.nonlinear:
-            x, r_own, record = _nonlinear(s, opts, seconds)
-        else:
-            x, r_own, record = _linear(s, opts, seconds)
-    n2 = 2 * s.lay.n_owned
-    t0 = time.perf_counter()
-    reac = np.zeros(n2)
-    reac[s.system.row_c] = r_own[s.system.row_c]
-    u = s.ex.root_nodal(x)
-    reactions = s.ex.root_nodal(reac)
-    seconds["gather"] = time.perf_counter() - t0
+        try:
+            if opts.nonlinear:
+                x, r_own, record = _nonlinear(s, opts, seconds)
+            else:
+                x, r_own, record = _linear(s, opts, seconds)
+            t0 = time.perf_counter()
+            reac = np.zeros(2 * s.lay.n_owned)
+            reac[s.system.row_c] = r_own[s.system.row_c]
+            u = s.ex.root_nodal(x)
+            reactions = s.ex.root_nodal(reac)
+            seconds["gather"] = time.perf_counter() - t0
+        finally:  # the same destroys in the same order on every rank
+            s.system.close()
+            s.ex.close()
     seconds["total"] = time.perf_counter() - t_start
     mem = patch_memory(s.lay)
     mem["peak_MB"] = _peak_mb()
@@ -429,7 +453,10 @@ class PatchProblem:
         self._fresh = False
         self.log.append(rec)
         if not rec.converged:
-            raise SolverError(f"PETSc KSP did not converge (reason {rec.reason})")
+            raise SolverError(
+                f"PETSc KSP did not converge (reason {rec.reason})",
+                SolveInfo("petsc", nonlinear=True, linear_solves=tuple(self.log)),
+            )
         return x, rec.iterations
 
     def negative_pivots(self) -> int | None:
@@ -442,7 +469,7 @@ class PatchProblem:
 
 def _nonlinear(s: _Setup, opts, seconds: dict):
     problem = PatchProblem(s, opts)
-    x, rep = solve_nonlinear(problem, opts, "petsc (GMRES + GAMG)")
+    x, rep = solve_nonlinear(problem, opts, "petsc", "petsc (GMRES + GAMG)")
     seconds["assembly"] = problem.assembly_seconds
     seconds["setup"] = float(sum(k.setup_seconds for k in problem.log))
     seconds["solve"] = float(sum(k.solve_seconds for k in problem.log))

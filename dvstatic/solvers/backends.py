@@ -11,7 +11,7 @@ import importlib
 
 from ..errors import MissingDependencyError
 
-__all__ = ["ENGINES", "engine"]
+__all__ = ["ENGINES", "engine", "installed"]
 
 #: engine name -> (module, what it needs, pip extra, how to install)
 ENGINES = {
@@ -25,6 +25,15 @@ ENGINES = {
 }
 
 
+def installed(name: str) -> bool:
+    """True if the optional dependency of engine ``name`` can be imported."""
+    try:
+        importlib.import_module(ENGINES[name][1])
+    except ImportError:
+        return False
+    return True
+
+
 def engine(name: str):
     """The module of engine ``name`` (it provides ``solve(model, supports, loads, opts)``).
 
@@ -34,12 +43,10 @@ def engine(name: str):
         The engine's optional dependency is not installed (names the extra).
     """
     module, needs, extra, how = ENGINES[name]
-    try:
-        importlib.import_module(needs)
-    except ImportError:
+    if not installed(name):
         raise MissingDependencyError(
             f"solver={name!r} needs {needs} (the dvstatic[{extra}] extra), which is not "
             f"installed: {how}",
             extra,
-        ) from None
+        )
     return importlib.import_module(module)

@@ -19,7 +19,7 @@ from ..errors import ConvergenceError, SingularError, UnstableError
 from ..lattice import VoronoiModel
 from ..linalg import AMGSolver, ConstrainedSystem, DirectSolver, rigid_modes
 from ..mesh import mesh_dof_order
-from .result import StabilityCheck
+from .result import SolveInfo, StabilityCheck
 from .stability import CHECK_MAX_DOF, stability
 
 log = logging.getLogger(__name__)
@@ -58,10 +58,13 @@ def _engine(model: VoronoiModel, kind: str, dofs, check_stability: bool, support
         return (*cache[key], True)
     K = model.stiffness("bsr")
     system = ConstrainedSystem(K, dofs)
-    if kind == "direct":
-        engine = DirectSolver(system.A, order=mesh_dof_order(model.mesh))
-    else:
-        engine = AMGSolver(system.A, rigid_modes(model.mesh.points))
+    try:
+        if kind == "direct":
+            engine = DirectSolver(system.A, order=mesh_dof_order(model.mesh))
+        else:
+            engine = AMGSolver(system.A, rigid_modes(model.mesh.points))
+    except SingularError as exc:
+        raise SingularError(str(exc), SolveInfo(kind, n_dof=K.shape[0])) from None
     stab = StabilityCheck()
     if check_stability:
         stab = _check(model, kind, system, engine, supports)
@@ -83,7 +86,9 @@ def _check(model, kind, system, engine, supports) -> StabilityCheck:
     stab = StabilityCheck(neg is not None, "ldl-inertia", neg, time.perf_counter() - t0)
     if neg:
         raise UnstableError(
-            unstable_message(model, neg, supports), {"stability": stab}, negative_eigenvalues=neg
+            unstable_message(model, neg, supports),
+            SolveInfo(kind, stability=stab, n_dof=system.A.shape[0]),
+            negative_eigenvalues=neg,
         )
     return stab
 
@@ -115,7 +120,10 @@ def solve_linear(model: VoronoiModel, kind: str, dofs, values, f, opts, supports
         x, rec = engine.solve(b, rtol=opts.rtol, maxiter=opts.linear_maxiter())
     t2 = time.perf_counter()
     if rec.get("indefinite"):
-        raise UnstableError(unstable_message(model, None, supports), {"stability": stab})
+        raise UnstableError(
+            unstable_message(model, None, supports),
+            SolveInfo(kind, stability=stab, iterations=rec["iterations"]),
+        )
     residual = rec["residuals"][-1]
     result = LinearResult(
         rec["iterations"],
@@ -150,9 +158,17 @@ def _accept(kind: str, x: np.ndarray, result: LinearResult, opts) -> None:
         "iteration(s): the system is singular or badly conditioned (lattice mechanism or "
         "unstable micro-parameters)"
     )
+    info = SolveInfo(
+        kind,
+        iterations=result.iterations,
+        residuals=result.residuals,
+        residual=result.residual,
+        stability=result.stability,
+        backward_error=result.backward_error,
+    )
     if kind == "amg" and finite:
-        raise ConvergenceError(message + "; try solver='direct'", result, state=x.copy())
-    raise SingularError(message, result)
+        raise ConvergenceError(message + "; try solver='direct'", info, state=x.copy())
+    raise SingularError(message, info)
 
 
 def unstable_message(model: VoronoiModel, count: int | None, supports) -> str:

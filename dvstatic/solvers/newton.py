@@ -19,7 +19,6 @@ tangent has negative pivots (loss of stability: buckling or a limit point) raise
 from __future__ import annotations
 
 import logging
-import time
 from dataclasses import dataclass
 from typing import Any, Protocol
 
@@ -30,7 +29,7 @@ from ..lattice import VoronoiModel
 from ..lattice.operator import scatter_bond_forces
 from ..linalg import ConstrainedSystem
 from .options import SolveOptions
-from .result import NewtonStep
+from .result import NewtonStep, SolveInfo
 from .tangent import TangentSolver
 
 log = logging.getLogger(__name__)
@@ -157,11 +156,15 @@ class NewtonReport:
     tangent_builds: int
     iterations: int
     residual: float
-    seconds: float
 
 
-def solve_nonlinear(problem: NewtonProblem, opts: SolveOptions, solver_name: str):
+def solve_nonlinear(
+    problem: NewtonProblem, opts: SolveOptions, kind: str, description: str | None = None
+):
     """Equilibrium ``f_int(u) = f_ext`` with the prescribed values, by load stepping.
+
+    ``kind`` names the engine in the reports (``"direct"``, ``"amg"``, ``"petsc"``),
+    ``description`` its linear solver in messages (default ``kind``).
 
     Returns
     -------
@@ -173,11 +176,10 @@ def solve_nonlinear(problem: NewtonProblem, opts: SolveOptions, solver_name: str
     ------
     ConvergenceError
         A load step failed after every cut-back (``state``, ``load_factor``: the last
-        converged state).
+        converged state; for a distributed problem ``state`` holds this rank's dofs).
     UnstableError
         A converged state is unstable and ``allow_unstable`` is not set.
     """
-    t_start = time.perf_counter()
     u = np.zeros_like(problem.f_ext)
     lam, dlam = 0.0, 1.0 / opts.steps
     f_scale = problem.norm(problem.f_ext)
@@ -190,7 +192,7 @@ def solve_nonlinear(problem: NewtonProblem, opts: SolveOptions, solver_name: str
             step_no += 1
             ok, u_new, rec = _newton_step(problem, u, target, f_scale, opts)
             if ok:
-                _check_stable(problem, opts, step_no, target, accepted, rec)
+                _check_stable(problem, opts, step_no, target, accepted, rec, kind)
                 u, lam = u_new, target
                 accepted.append(rec)
                 _report_step(bar, step_no, rec)
@@ -200,8 +202,10 @@ def solve_nonlinear(problem: NewtonProblem, opts: SolveOptions, solver_name: str
             cutbacks += 1
             if cutbacks > opts.max_cutbacks:
                 raise ConvergenceError(
-                    _failure_message(step_no, lam, rec, cutbacks - 1, dlam, opts, solver_name),
-                    {"steps": tuple(accepted), "failed_step": rec, "cutbacks": cutbacks - 1},
+                    _failure_message(
+                        step_no, lam, rec, cutbacks - 1, dlam, opts, description or kind
+                    ),
+                    _partial(kind, accepted, rec, cutbacks - 1, problem.builds, lam),
                     state=u.copy(),
                     load_factor=lam,
                 )
@@ -217,12 +221,26 @@ def solve_nonlinear(problem: NewtonProblem, opts: SolveOptions, solver_name: str
         problem.builds,
         int(sum(s.iterations for s in accepted)),
         float(residual),
-        time.perf_counter() - t_start,
     )
     return u, report
 
 
-def _check_stable(problem, opts, step_no, target, accepted, rec) -> None:
+def _partial(kind, accepted, failed, cutbacks, builds, lam) -> SolveInfo:
+    """What Newton did before it stopped (for the error's ``info``)."""
+    return SolveInfo(
+        kind,
+        nonlinear=True,
+        iterations=int(sum(s.iterations for s in accepted)),
+        residuals=tuple(r for st in accepted for r in st.residuals),
+        steps=tuple(accepted),
+        failed_step=failed,
+        cutbacks=cutbacks,
+        tangent_builds=builds,
+        load_factor=lam,
+    )
+
+
+def _check_stable(problem, opts, step_no, target, accepted, rec, kind) -> None:
     neg = problem.negative_pivots()
     if opts.allow_unstable or not neg:
         return
@@ -231,7 +249,7 @@ def _check_stable(problem, opts, step_no, target, accepted, rec) -> None:
         f"equilibrium: the tangent has {neg} negative pivot(s) (buckling or a limit "
         "point); the load cannot be carried in this configuration. Add an imperfection to "
         "follow a post-buckling path, or pass allow_unstable=True to accept the state",
-        {"steps": tuple(accepted), "failed_step": rec},
+        _partial(kind, accepted, rec, 0, problem.builds, rec.load_factor),
         negative_eigenvalues=neg,
     )
 
@@ -393,7 +411,10 @@ def _line_search(problem: NewtonProblem, u, du, lam: float, search: bool):
         cand = (problem.norm(state.r_free), trial, state, alpha)
         if not search:
             return cand
-        du_bar, _ = problem.solve(-state.r_free, zero_c)
+        try:
+            du_bar, _ = problem.solve(-state.r_free, zero_c)
+        except SolverError:  # the tangent solve failed: this step is not usable
+            return None
         ratio = problem.norm(np.where(problem.constrained, 0.0, du_bar)) / max(norm_du, 1e-300)
         if best is None or ratio < best[0]:
             best = (ratio, cand)

@@ -15,6 +15,7 @@ import numpy as np
 
 from .._checks import check_choice, check_int, check_positive
 from ..errors import InputError
+from ..linalg import AUTO_DIRECT_MAX_DOF
 
 __all__ = ["SOLVERS", "SolveOptions", "ALIASES", "options_markdown", "options_docstring"]
 
@@ -155,6 +156,13 @@ class SolveOptions:
             )
         return dataclasses.replace(base or cls(), **kwargs)
 
+    def resolved_solver(self, n_dof: int) -> str:
+        """The solver that runs for ``n_dof`` unknowns (``auto``: direct up to
+        :data:`~dvstatic.linalg.AUTO_DIRECT_MAX_DOF`, AMG above)."""
+        if self.solver != "auto":
+            return self.solver
+        return "direct" if n_dof <= AUTO_DIRECT_MAX_DOF else "amg"
+
     def linear_maxiter(self) -> int:
         """The iteration limit of the chosen iterative solver."""
         if self.maxiter is not None:
@@ -163,8 +171,10 @@ class SolveOptions:
 
 
 def _check_bool(name: str, value) -> None:
-    if not isinstance(value, (bool, np.bool_)):
-        raise TypeError(f"{name} must be True or False, got {type(value).__name__} {value!r}")
+    """True/False (numpy booleans and the integers 0 and 1 too, as dvstatic 0.1 took)."""
+    if isinstance(value, (bool, np.bool_)) or (isinstance(value, int) and value in (0, 1)):
+        return
+    raise TypeError(f"{name} must be True or False, got {type(value).__name__} {value!r}")
 
 
 def _unit_interval(name: str, value) -> float:

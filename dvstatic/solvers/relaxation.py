@@ -28,6 +28,7 @@ import numpy as np
 
 from ..errors import ConvergenceError, UnstableError
 from ..lattice import VoronoiModel
+from .result import SolveInfo
 
 log = logging.getLogger(__name__)
 
@@ -92,7 +93,8 @@ class _Relaxation:
                 if not np.isfinite(res) or res > 1e12:
                     raise UnstableError(
                         f"dynamic relaxation blew up at step {step} (relative residual "
-                        f"{res:.3e}): the lattice is unstable for these micro-parameters"
+                        f"{res:.3e}): the lattice is unstable for these micro-parameters",
+                        _partial(step, hist, res),
                     )
                 self.step(r)
                 if callback is not None and step % callback_every == 0:
@@ -103,6 +105,7 @@ class _Relaxation:
                     raise ConvergenceError(
                         f"dynamic relaxation stopped by the time limit ({time_limit} s) at "
                         f"step {step} with relative residual {res:.3e} (target {rtol:.1e})",
+                        _partial(step, hist, res),
                         state=self.u.copy(),
                     )
             else:
@@ -110,6 +113,7 @@ class _Relaxation:
                     f"dynamic relaxation did not reach the residual target {rtol:.1e} in "
                     f"{max_steps} steps (relative residual {res:.3e}); raise maxiter or use "
                     "an implicit solver",
+                    _partial(max_steps, hist, res),
                     state=self.u.copy(),
                 )
         hist.append(res)
@@ -127,6 +131,17 @@ class _Relaxation:
         self.v[~free] = 0.0
         self.u += self.v
         self.fi = self.force(self.u)
+
+
+def _partial(step: int, hist: list[float], res: float) -> SolveInfo:
+    """What a failed relaxation did (for the error's ``info``)."""
+    return SolveInfo(
+        "dynamic-relaxation",
+        iterations=step,
+        residuals=tuple(hist) + (res,),
+        residual=res,
+        damping="adaptive viscous",
+    )
 
 
 def dynamic_relaxation(

@@ -35,15 +35,19 @@ STRESS_METHODS = ("virial", "strain")
 class _Record:
     """Read-only record with the old dict-style access kept for one release."""
 
+    #: old dict keys that are attributes under another name now
+    _OLD_KEYS: dict[str, str] = {}
+
     def __getitem__(self, key: str):
+        new = self._OLD_KEYS.get(key, key)
         warnings.warn(
-            f"{type(self).__name__}[{key!r}] is deprecated; use the attribute .{key}",
+            f"{type(self).__name__}[{key!r}] is deprecated; use the attribute .{new}",
             DeprecationWarning,
             stacklevel=2,
         )
-        if key not in self._names():
+        if new not in self._names():
             raise KeyError(key)
-        return getattr(self, key)
+        return _dictish(getattr(self, new))
 
     def get(self, key: str, default=None):
         """Attribute ``key`` if this record has it, else ``default`` (dict-style)."""
@@ -62,6 +66,15 @@ class _Record:
     def as_dict(self) -> dict:
         """Plain nested dict (JSON-ready apart from numpy scalars)."""
         return asdict(self)
+
+
+def _dictish(value):
+    """Nested records as the plain dicts the old ``info`` held."""
+    if isinstance(value, _Record):
+        return value.as_dict()
+    if isinstance(value, tuple) and value and isinstance(value[0], _Record):
+        return [v.as_dict() for v in value]
+    return value
 
 
 @dataclass(frozen=True)
@@ -222,6 +235,18 @@ class SolveInfo(_Record):
     linear_solves: tuple[LinearSolve, ...] = ()
     parallel: ParallelInfo | None = None
     damping: str | None = None
+
+    _OLD_KEYS = {"ksp": "linear_solves"}
+
+    def __getitem__(self, key: str):
+        if key == "newton_seconds":
+            warnings.warn(
+                "SolveInfo['newton_seconds'] is deprecated; use .seconds.solve",
+                DeprecationWarning,
+                stacklevel=2,
+            )
+            return self.seconds.solve
+        return super().__getitem__(key)
 
 
 @dataclass(frozen=True, eq=False)

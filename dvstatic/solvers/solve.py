@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import inspect
 import logging
 import time
@@ -12,8 +13,7 @@ from ..errors import ConvergenceError, InputError
 from ..lattice import VoronoiModel
 from ..lattice import geometry as _geometry
 from ..lattice.stress import check_model
-from ..linalg import AUTO_DIRECT_MAX_DOF
-from ..problem import check_restrained, constraints, load_vector
+from ..problem import as_list, check_restrained, constraints, load_vector
 from . import backends
 from .linear import solve_linear
 from .newton import SerialProblem, solve_nonlinear
@@ -27,13 +27,6 @@ log = logging.getLogger(__name__)
 __all__ = ["solve"]
 
 
-def _listify(items) -> list:
-    """None, one item, or a list/tuple of items, as a list."""
-    if isinstance(items, (list, tuple)):
-        return list(items)
-    return [] if items is None else [items]
-
-
 def solve(model: VoronoiModel, supports=None, loads=None, *, options=None, **kwargs) -> Solution:
     check_model(model)
     opts = SolveOptions.from_kwargs(options, **kwargs)
@@ -41,7 +34,8 @@ def solve(model: VoronoiModel, supports=None, loads=None, *, options=None, **kwa
         raise InputError(
             "solve() needs a bounded mesh; use homogenize() on periodic meshes", "mesh"
         )
-    supports_l, loads_l = _listify(supports), _listify(loads)
+    supports_l = as_list(supports, "Fix")
+    loads_l = as_list(loads, "Traction, Pressure, BodyForce or PointLoad")
     if opts.solver == "petsc":
         return backends.engine("petsc").solve(model, supports_l, loads_l, opts)
     try:
@@ -91,9 +85,7 @@ class _Problem:
 def _solve_serial(model: VoronoiModel, supports: list, loads: list, opts) -> Solution:
     p = _Problem(model, supports, loads)
     n = p.K.shape[0]
-    kind = opts.solver
-    if kind == "auto":
-        kind = "direct" if n <= AUTO_DIRECT_MAX_DOF else "amg"
+    kind = opts.resolved_solver(n)
     common = dict(
         n_dof=n,
         n_constrained=int(p.dofs.size),
@@ -185,32 +177,28 @@ def _unconverged(model, supports: list, loads: list, exc: ConvergenceError, opts
     """The last state of a failed iteration, marked unconverged (best effort)."""
     mesh = model.mesh
     dofs, _ = constraints(mesh, supports)
-    f = exc.load_factor * load_vector(mesh, loads)
+    f_full = load_vector(mesh, loads)
     x = np.asarray(exc.state, dtype=float).reshape(-1)
-    r_full = _internal(model, x, model.stiffness("bsr"), opts.nonlinear) - f
+    r_full = _internal(model, x, model.stiffness("bsr"), opts.nonlinear) - exc.load_factor * f_full
     reactions = np.zeros_like(x)
     reactions[dofs] = r_full[dofs]
-    prior = exc.info if isinstance(exc.info, dict) else {}
-    steps = tuple(prior.get("steps", ()))
-    kind = opts.solver
-    if kind == "auto":
-        kind = "direct" if 2 * mesh.n_points <= AUTO_DIRECT_MAX_DOF else "amg"
     free = np.ones(x.size, dtype=bool)
     free[dofs] = False
-    scale = max(float(np.linalg.norm(f)), float(np.linalg.norm(r_full[dofs])), 1e-300)
-    info = SolveInfo(
-        kind,
+    # relative to the full load (or the reactions, with only prescribed displacements)
+    scale = max(float(np.linalg.norm(f_full)), float(np.linalg.norm(r_full[dofs])))
+    r_free = float(np.linalg.norm(r_full[free]))
+    residual = r_free / scale if scale > 0 else (0.0 if r_free == 0 else float("inf"))
+    prior = exc.info if isinstance(exc.info, SolveInfo) else SolveInfo(opts.resolved_solver(x.size))
+    info = dataclasses.replace(
+        prior,
         nonlinear=opts.nonlinear,
         converged=False,
         n_dof=x.size,
         n_constrained=int(dofs.size),
-        iterations=int(sum(s.iterations for s in steps)),
-        residual=float(np.linalg.norm(r_full[free])) / scale,
-        steps=steps,
-        cutbacks=int(prior.get("cutbacks", 0)),
+        residual=residual,
         load_factor=exc.load_factor,
         failure=str(exc),
-        failed_step=prior.get("failed_step"),
+        coupling_assembled=model.operator.has_coupling,
     )
     log.warning("best effort: returning an unconverged state (%s)", exc)
     return Solution(model, x.reshape(-1, 2), reactions.reshape(-1, 2), info, supports, loads)

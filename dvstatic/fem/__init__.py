@@ -1,0 +1,410 @@
+"""Plane-stress finite-element reference (scikit-fem) on the lattice's own triangles.
+
+``solve(mesh, E, nu, supports, loads, order=1 | 2, refine=0)`` takes the same
+:class:`~dvstatic.Fix`, :class:`~dvstatic.Traction`, :class:`~dvstatic.Pressure`,
+:class:`~dvstatic.BodyForce` and :class:`~dvstatic.PointLoad` objects as
+:func:`dvstatic.solve`, builds P1 or P2 vector elements on the mesh triangles
+(uniformly refined ``refine`` times for a reference solution, new boundary nodes on
+the domain's true curves, :mod:`.mesh`), and returns the displacement at the lattice
+nodes (they stay vertices of the refined mesh) together with a way to evaluate it
+anywhere.
+
+Supports and loads on named parts act on the whole boundary segment (every refined
+facet on it, every dof of those facets); supports on node index arrays act on those
+nodes and on the facets of the boundary edges joining two of them. Prescribed values
+given per node are interpolated linearly along each boundary edge; prescribed
+functions of position are evaluated at every constrained dof. Tractions and pressures
+are integrated along the facets, body forces over the elements.
+
+scikit-fem is imported on first use only.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass
+from functools import cached_property
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .._checks import check_int
+from ..errors import InputError, SingularError
+from ..linalg import DirectSolver, nested_dissection
+from ..material import lame_plane_stress
+from ..mesh import Mesh
+from ..problem import (
+    BodyForce,
+    PointLoad,
+    Pressure,
+    Traction,
+    as_list,
+    evaluate,
+    select_edges,
+    select_nodes,
+    support_components,
+)
+from .mesh import FEMesh, build
+
+if TYPE_CHECKING:  # annotations only: scipy is imported where it is used
+    import scipy.sparse as sp
+
+
+log = logging.getLogger(__name__)
+
+__all__ = ["lame_plane_stress", "FESolution", "solve", "Comparison", "compare"]
+
+
+@dataclass(frozen=True, eq=False)
+class FESolution:
+    """Finite-element solution.
+
+    Attributes
+    ----------
+    mesh : Mesh
+        The lattice mesh the problem was posed on.
+    u : ndarray, shape (N, 2)
+        Displacement at the lattice nodes.
+    order, refine : int
+    info : dict
+        ``n_dof``, ``n_elements``, ``lame``, ``load_resultant`` (total applied force),
+        ``seconds`` per stage (mesh, assembly, solve).
+    basis : skfem.Basis
+        The vector basis (for your own post-processing with scikit-fem).
+    x : ndarray
+        The dof vector of ``basis``.
+    fe_mesh : FEMesh
+        The refined mesh and its boundary bookkeeping.
+    """
+
+    mesh: Mesh
+    u: np.ndarray
+    order: int
+    refine: int
+    info: dict
+    basis: object
+    x: np.ndarray
+    fe_mesh: FEMesh
+
+    def evaluate(self, points) -> np.ndarray:
+        """Displacement at arbitrary points inside the mesh, shape (n, 2)."""
+        p = _points(points)
+        v = _probes(self.basis, self.fe_mesh, p) @ self.x
+        n = len(p)
+        return np.c_[v[:n], v[n:]]
+
+    @property
+    def max_displacement(self) -> float:
+        return float(np.max(np.hypot(self.u[:, 0], self.u[:, 1])))
+
+    @cached_property
+    def _stress_fields(self):
+        """Element stresses L2-projected onto continuous scalar elements."""
+        import skfem
+
+        lam, mu = self.info["lame"]
+        g = self.basis.interpolate(self.x).grad  # (2, 2, elements, quadrature points)
+        exx, eyy, exy = g[0, 0], g[1, 1], 0.5 * (g[0, 1] + g[1, 0])
+        tr = exx + eyy
+        comps = (lam * tr + 2 * mu * exx, lam * tr + 2 * mu * eyy, 2 * mu * exy)
+        el = skfem.ElementTriP1() if self.order == 1 else skfem.ElementTriP2()
+        sb = self.basis.with_element(el)
+        return sb, [sb.project(skfem.DiscreteField(c)) for c in comps]
+
+    def stress(self, points) -> np.ndarray:
+        """Plane-stress Cauchy stress at points, shape (n, 2, 2).
+
+        The element stresses are L2-projected onto continuous scalar elements of the
+        same order (smooth nodal stresses), then evaluated at the points.
+        """
+        p = _points(points)
+        sb, vals = self._stress_fields
+        probe = _probes(sb, self.fe_mesh, p)
+        sxx, syy, sxy = (probe @ v for v in vals)
+        return np.stack([np.stack([sxx, sxy], -1), np.stack([sxy, syy], -1)], -2)
+
+
+def _points(points) -> np.ndarray:
+    p = np.atleast_2d(np.asarray(points, dtype=float))
+    if p.ndim != 2 or p.shape[1] != 2:
+        raise InputError(f"points must have shape (n, 2), got {p.shape}", "points")
+    return p
+
+
+def _probes(basis, fe: FEMesh, p: np.ndarray):
+    """The matrix that evaluates a field of ``basis`` at points ``p`` (n, 2) (scikit-fem's
+    ``probes``, with the cells found on the straight-sided mesh so that quadratic
+    geometry works too)."""
+    from scipy.sparse import coo_matrix
+
+    x = np.ascontiguousarray(p.T)
+    cells = fe.linear.element_finder()(*x)
+    pts = basis.mapping.invF(x[:, :, np.newaxis], tind=cells)
+    phis = np.array(
+        [basis.elem.gbasis(basis.mapping, pts, k, tind=cells)[0] for k in range(basis.Nbfun)]
+    ).flatten()
+    comp = int(np.prod(basis._base_tensor_order))
+    rows = np.tile(np.arange(comp * x.shape[1], dtype=np.int32), basis.Nbfun)
+    cols = basis.element_dofs[:, np.tile(cells, comp)].flatten()
+    return coo_matrix((phis, (rows, cols)), shape=(comp * x.shape[1], basis.N)).tocsr()
+
+
+def solve(
+    mesh: Mesh,
+    E: float,
+    nu: float,
+    supports=None,
+    loads=None,
+    order: int = 1,
+    refine: int = 0,
+) -> FESolution:
+    """Plane-stress FE solution with the lattice's supports and loads.
+
+    Parameters
+    ----------
+    mesh : Mesh
+        Bounded mesh; its triangles are the elements (refined ``refine`` times).
+    E, nu : float
+        Young's modulus (> 0) and Poisson's ratio (-1 < nu < 1).
+    supports, loads
+        As for :func:`dvstatic.solve`.
+    order : {1, 2}
+        Lagrange element order (2: quadratic geometry on curved boundaries).
+    refine : int
+        Uniform refinements (each splits a triangle into four), >= 0.
+
+    Returns
+    -------
+    FESolution
+    """
+    import skfem
+    from skfem.models.elasticity import linear_elasticity
+
+    if not isinstance(mesh, Mesh):
+        raise TypeError(f"mesh must be a dvstatic Mesh, got {type(mesh).__name__}")
+    if mesh.is_periodic:
+        raise InputError("the FE reference needs a bounded mesh", "mesh")
+    lam, mu = lame_plane_stress(E, nu)
+    order = check_int("order", order, minimum=1, maximum=2)
+    refine = check_int("refine", refine, minimum=0, maximum=8)
+    t0 = time.perf_counter()
+    fe = build(mesh, refine, order)
+    elem = skfem.ElementVector(skfem.ElementTriP1() if order == 1 else skfem.ElementTriP2())
+    basis = skfem.Basis(fe.skfem, elem)
+    t1 = time.perf_counter()
+    K = skfem.asm(linear_elasticity(lam, mu), basis)
+    f = _load_vector(mesh, fe, elem, basis, loads)
+    D, vals = _prescribed(mesh, fe, basis, supports)
+    x = np.zeros(basis.N)
+    x[D] = vals
+    A, b, x_free, free = skfem.condense(K, f, x=x, D=D)
+    t2 = time.perf_counter()
+    x[free] = _solve_spd(A, b, basis.doflocs[:, free].T)
+    t3 = time.perf_counter()
+    nodal = basis.nodal_dofs
+    u = np.c_[x[nodal[0, : mesh.n_points]], x[nodal[1, : mesh.n_points]]]
+    info = {
+        "n_dof": int(basis.N),
+        "n_elements": int(fe.triangles.shape[0]),
+        "lame": (lam, mu),
+        "load_resultant": _resultant(basis, f),
+        "seconds": {"mesh": t1 - t0, "assembly": t2 - t1, "solve": t3 - t2, "total": t3 - t0},
+    }
+    log.info("FE P%d refine=%d: %d dof in %.3f s", order, refine, basis.N, t3 - t0)
+    return FESolution(mesh, u, order, refine, info, basis, x, fe)
+
+
+def _resultant(basis, f: np.ndarray) -> tuple[float, float]:
+    """Total applied force (the load vector summed per component)."""
+    out = []
+    for c in range(2):
+        dofs = np.concatenate(
+            [basis.nodal_dofs[c], basis.facet_dofs[c] if basis.facet_dofs.size else []]
+        )
+        out.append(float(f[dofs.astype(np.int64)].sum()))
+    return tuple(out)
+
+
+def _facets_of(mesh: Mesh, fe: FEMesh, edges: np.ndarray) -> np.ndarray:
+    """skfem boundary facets lying on the coarse boundary edges ``edges`` (m, 2)."""
+    n = mesh.n_points
+    be = mesh.boundary_edges
+    key_be = be[:, 0] * n + be[:, 1]
+    order = np.argsort(key_be)
+    idx = order[np.searchsorted(key_be[order], edges[:, 0] * n + edges[:, 1])]
+    chosen = np.zeros(len(be), dtype=bool)
+    chosen[idx] = True
+    bf = fe.skfem.boundary_facets()
+    return bf[chosen[fe.parent[fe.facet_index(bf)]]]
+
+
+def _load_vector(mesh: Mesh, fe: FEMesh, elem, basis, loads) -> np.ndarray:
+    """Consistent load vector: tractions and pressures integrated along the facets of
+    their edges, body forces over the elements, point loads on the lattice nodes."""
+    import skfem
+
+    f = np.zeros(basis.N)
+    for load in as_list(loads, "Traction, Pressure, BodyForce or PointLoad"):
+        if isinstance(load, (Traction, Pressure)):
+            what = type(load).__name__
+            edges = select_edges(mesh, load.where, what)
+            fb = skfem.FacetBasis(fe.skfem, elem, facets=_facets_of(mesh, fe, edges))
+            f += skfem.asm(_boundary_form(load), fb)
+        elif isinstance(load, BodyForce):
+            f += skfem.asm(_vector_form(load.value, "BodyForce"), basis)
+        elif isinstance(load, PointLoad):
+            nodes = select_nodes(mesh, load.nodes, "PointLoad")
+            for c in range(2):
+                np.add.at(f, basis.nodal_dofs[c, nodes], load.value[c])
+        else:
+            raise TypeError(f"unknown load type {type(load).__name__}")
+    return f
+
+
+def _at(w) -> np.ndarray:
+    """Quadrature points of a form as an (m, 2) array."""
+    return np.stack([w.x[0].ravel(), w.x[1].ravel()], axis=1)
+
+
+def _vector_form(value, what: str):
+    """Linear form of a constant or position-dependent force density (2 components)."""
+    import skfem
+
+    @skfem.LinearForm
+    def form(v, w):
+        if callable(value):
+            shape = w.x[0].shape
+            b = evaluate(value, _at(w), (2,), what)
+            return b[:, 0].reshape(shape) * v[0] + b[:, 1].reshape(shape) * v[1]
+        return value[0] * v[0] + value[1] * v[1]
+
+    return form
+
+
+def _boundary_form(load):
+    """Linear form of a traction, or of a pressure ``-p n`` with the outward normal."""
+    import skfem
+
+    if isinstance(load, Traction):
+        return _vector_form(load.value, "Traction")
+
+    @skfem.LinearForm
+    def pressure(v, w):
+        shape = w.x[0].shape
+        p = evaluate(load.p, _at(w), (), "Pressure").reshape(shape) if callable(load.p) else load.p
+        return -p * (w.n[0] * v[0] + w.n[1] * v[1])
+
+    return pressure
+
+
+def _prescribed(mesh: Mesh, fe: FEMesh, basis, supports) -> tuple[np.ndarray, np.ndarray]:
+    """Prescribed FE dofs and values.
+
+    Every dof on the facets of the selected boundary edges (a named part; the
+    boundary edges joining two selected nodes) and the vertex dofs of the selected
+    nodes. A function of position is evaluated at each dof; per-node values are
+    interpolated linearly along their coarse edge.
+    """
+    dof_list, val_list = [], []
+    be = mesh.boundary_edges
+    for c in support_components(mesh, supports):
+        dof_list.append(basis.nodal_dofs[c.component, c.nodes])
+        val_list.append(np.broadcast_to(np.asarray(c.value, dtype=float), c.nodes.shape))
+        chosen = np.zeros(mesh.n_points, dtype=bool)
+        chosen[c.nodes] = True
+        on = chosen[be[:, 0]] & chosen[be[:, 1]]
+        if on.any():
+            dofs, edge, s = _facet_dofs(mesh, fe, basis, be[on], c.component)
+            dof_list.append(dofs)
+            val_list.append(_values(mesh, basis, c, dofs, edge, s))
+    if not dof_list:
+        raise InputError("no supports: the FE problem is singular", "supports")
+    D, first = np.unique(np.concatenate(dof_list), return_index=True)
+    return D, np.concatenate(val_list)[first]
+
+
+def _facet_dofs(mesh: Mesh, fe: FEMesh, basis, edges: np.ndarray, comp: int):
+    """Dofs of component ``comp`` on the facets of coarse boundary ``edges``, with the
+    coarse edge and the parameter along it of every dof."""
+    bf = _facets_of(mesh, fe, edges)
+    rows = fe.facet_index(bf)
+    edge, s = fe.parent[rows], fe.s[rows]
+    dofs = [basis.nodal_dofs[comp, fe.facets[rows, 0]], basis.nodal_dofs[comp, fe.facets[rows, 1]]]
+    edges_, params = [edge, edge], [s[:, 0], s[:, 1]]
+    if basis.facet_dofs.shape[0]:  # P2: the mid-edge dof of every facet
+        dofs.append(basis.facet_dofs[comp, bf])
+        edges_.append(edge)
+        params.append(s.mean(axis=1))
+    return np.concatenate(dofs), np.concatenate(edges_), np.concatenate(params)
+
+
+def _values(mesh: Mesh, basis, c, dofs, edge, s) -> np.ndarray:
+    """Prescribed values at ``dofs``: the field at their locations, the constant, or
+    the per-node values interpolated along the coarse edge."""
+    if c.field is not None:
+        return evaluate(c.field, basis.doflocs[:, dofs].T, (), f"Fix {'xy'[c.component]}")
+    if np.ndim(c.value) == 0:
+        return np.full(dofs.size, float(c.value))
+    full = np.zeros(mesh.n_points)
+    full[c.nodes] = c.value
+    a, b = mesh.boundary_edges[edge, 0], mesh.boundary_edges[edge, 1]
+    return (1.0 - s) * full[a] + s * full[b]
+
+
+def _solve_spd(A: sp.spmatrix, b: np.ndarray, locs: np.ndarray) -> np.ndarray:
+    """Direct solve with a nested-dissection ordering on the dof locations."""
+    import scipy.sparse as sp
+
+    A = sp.csr_matrix(A)
+    coo = sp.triu(A, k=1).tocoo()
+    order = nested_dissection(locs + 1e-12 * np.arange(len(locs))[:, None], np.c_[coo.row, coo.col])
+    lu = DirectSolver(A, order=order)
+    if lu.negative_pivots:
+        raise SingularError("the FE stiffness is not positive definite: check the supports")
+    x, info = lu.solve(b)
+    if not np.all(np.isfinite(x)) or info["residuals"][-1] > 1e-8:
+        raise SingularError(f"FE solve failed (relative residual {info['residuals'][-1]:.2e})")
+    return x
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """Difference between two displacement fields on the same nodes.
+
+    Attributes
+    ----------
+    l2 : float
+        ``|u_a - u_b| / |u_b|`` over all nodes (discrete l2).
+    max : float
+        ``max_i |u_a,i - u_b,i| / max_i |u_b,i|`` (nodal vector magnitudes).
+    diff : ndarray, shape (N, 2)
+        ``u_a - u_b``.
+    """
+
+    l2: float
+    max: float
+    diff: np.ndarray
+
+
+def compare(a, b) -> Comparison:
+    """Relative L2 and max displacement errors of ``a`` against the reference ``b``.
+
+    ``a`` and ``b`` are solutions (anything with ``.u``) or (N, 2) arrays on the same
+    nodes.
+    """
+    ua = np.asarray(getattr(a, "u", a), dtype=float)
+    ub = np.asarray(getattr(b, "u", b), dtype=float)
+    if ua.shape != ub.shape or ua.ndim != 2 or ua.shape[1] != 2:
+        raise InputError(
+            f"compare needs two (N, 2) fields on the same nodes, got {ua.shape} and {ub.shape}",
+            "b",
+        )
+    d = ua - ub
+    nb = float(np.linalg.norm(ub))
+    mb = float(np.max(np.hypot(ub[:, 0], ub[:, 1])))
+    if nb == 0:
+        raise InputError("the reference field is zero: relative errors are undefined", "b")
+    return Comparison(
+        float(np.linalg.norm(d) / nb), float(np.max(np.hypot(d[:, 0], d[:, 1])) / mb), d
+    )
