@@ -1,5 +1,10 @@
 """Plane elasticity laws and the Mandel tensor form (no dependency on meshes).
 
+:class:`Elastic` is an isotropic material in a plane problem: plane stress, or plane
+strain through the standard effective constants ``E* = E / (1 - nu^2)``,
+``nu* = nu / (1 - nu)`` (the in-plane law of plane strain is the plane-stress law of
+``E*, nu*``; the out-of-plane stress is ``szz = nu (sxx + syy)``).
+
 Stress/strain matrices follow the paper's eq. (6): Mandel vectors
 ``[s11, s22, sqrt(2) s12]``, so that ``sigma = C eps`` holds with
 ``eps = [e11, e22, sqrt(2) e12]``; plane stress then reads
@@ -9,12 +14,16 @@ entry as ``(1-nu)/2``, i.e. ``C1212``, half the Mandel entry.)
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-from ._checks import check_positive, check_real
+from ._checks import check_choice, check_positive, check_real
 from .errors import InputError
 
 __all__ = [
+    "PLANES",
+    "Elastic",
     "SQ2",
     "to_mandel",
     "plane_stress_tensor",
@@ -24,6 +33,58 @@ __all__ = [
 ]
 
 SQ2 = np.sqrt(2.0)
+#: plane problems
+PLANES = ("stress", "strain")
+
+
+@dataclass(frozen=True)
+class Elastic:
+    """An isotropic elastic material of a plane problem.
+
+    Parameters
+    ----------
+    E : float
+        Young's modulus (force per area), > 0.
+    nu : float
+        Poisson's ratio: -1 < nu < 1 in plane stress, -1 < nu < 0.5 in plane strain.
+    plane : {"stress", "strain"}
+    """
+
+    E: float
+    nu: float
+    plane: str = "stress"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "E", check_positive("E", self.E))
+        check_choice("plane", self.plane, PLANES)
+        if self.plane == "stress":
+            nu = check_poisson(self.nu)
+        else:
+            nu = check_real("nu", self.nu)
+            if not -1.0 < nu < 0.5:
+                raise InputError(
+                    f"nu must lie in the plane-strain range -1 < nu < 0.5, got {nu}", "nu"
+                )
+        object.__setattr__(self, "nu", nu)
+
+    @property
+    def in_plane(self) -> tuple[float, float]:
+        """``(E*, nu*)``: the constants of the equivalent plane-stress law."""
+        if self.plane == "stress":
+            return self.E, self.nu
+        return self.E / (1.0 - self.nu**2), self.nu / (1.0 - self.nu)
+
+    def stress(self, eps: np.ndarray) -> np.ndarray:
+        """In-plane stress of strains (..., 2, 2)."""
+        E2, nu2 = self.in_plane
+        return plane_stress_from_strain(eps, E2, nu2)
+
+    def out_of_plane(self, sigma: np.ndarray) -> np.ndarray:
+        """``szz`` of in-plane stresses (..., 2, 2): ``nu (sxx + syy)`` in plane strain,
+        zero in plane stress."""
+        if self.plane == "stress":
+            return np.zeros(np.shape(sigma)[:-2])
+        return self.nu * (sigma[..., 0, 0] + sigma[..., 1, 1])
 
 
 def check_poisson(nu, name: str = "nu") -> float:

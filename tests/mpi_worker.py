@@ -22,6 +22,9 @@ CASES = [
     ("stretch", "RV", True),
     # the relaxed calibration's bond-length spread summed across ranks
     ("uniaxial", "RV-relaxed", False),
+    # pressure on a bore lined by a second material (and, nonlinear, following it)
+    ("lined-bore", "RV", False),
+    ("lined-bore", "DV", True),
 ]
 
 
@@ -30,6 +33,16 @@ def setup(problem: str, model: str, nonlinear: bool):
     cls = dv.DV if model == "DV" else dv.RV
     nu = 0.35 if model == "DV" else 0.2
     calibration = "relaxed" if model.endswith("relaxed") else "paper"
+    if problem == "lined-bore":
+        lining = dv.domain.Circle((0.0, 0.0), 0.55, name="lining")
+        bore = dv.domain.Circle((0.0, 0.0), 0.4, "bore")
+        mesh = dv.mesh.disc(1.0, 0.08, name="outer", holes=[bore], regions=[lining])
+        p = mesh.points
+        near = [int(np.argmin(np.hypot(*(p - q).T))) for q in ([1, 0], [-1, 0], [0, 1])]
+        sup = [dv.Fix(near[:2], y=0.0), dv.Fix(near[2:], x=0.0)]
+        ld = [dv.Pressure("bore", 2e3 if nonlinear else 1.0, follower=nonlinear)]
+        materials = {"lining": (3e5, 0.25)}
+        return cls(mesh, 1e5, nu, calibration=calibration, materials=materials), sup, ld
     if problem == "stretch":
         mesh = dv.mesh.rectangle(1.0, 1.0, 0.05, kind="jittered", seed=5)
         sup = [dv.Fix("left", x=0.0), dv.Fix("bottom", y=0.0), dv.Fix("right", x=0.03)]

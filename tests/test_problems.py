@@ -153,3 +153,187 @@ def test_refined_fe_converges_around_a_hole():
     steps = np.diff(peaks)
     assert np.all(steps > 0) and steps[1] < 0.6 * steps[0]
     assert 3.0 < peaks[-1] < 3.2
+
+
+# ---------------------------------------------------------------- regions, materials
+def _layers():
+    upper = dv.domain.Polygon(np.array([[0, 0.5], [2, 0.5], [2, 1], [0, 1]]), name="upper")
+    right = dv.domain.Polygon(np.array([[1, 0], [2, 0], [2, 1], [1, 1]]), name="right")
+    return upper, right
+
+
+@pytest.mark.parametrize("kind", ["lattice", "jittered", "random", "cvt"])
+def test_regions_conform_and_keep_their_area(kind):
+    upper, _ = _layers()
+    inclusion = dv.domain.Circle((1.0, 0.25), 0.15, name="inclusion")
+    mesh = dv.mesh.rectangle(2.0, 1.0, 0.05, kind=kind, regions=[upper, inclusion])
+    assert set(mesh.regions) == {"upper", "inclusion"}
+    area = mesh.triangle_areas
+    assert area[mesh.regions["upper"]].sum() == pytest.approx(1.0, rel=1e-12)
+    # the inclusion is the inscribed polygon of its boundary nodes
+    assert area[mesh.regions["inclusion"]].sum() == pytest.approx(np.pi * 0.15**2, rel=0.03)
+    # no triangle crosses the interface y = 0.5
+    y = mesh.points[mesh.triangles][:, :, 1]
+    assert not np.any((y.min(axis=1) < 0.5 - 1e-9) & (y.max(axis=1) > 0.5 + 1e-9))
+    moved = mesh.perturbed(0.02, seed=1)
+    assert moved.triangle_areas[moved.regions["upper"]].sum() == pytest.approx(1.0, rel=1e-12)
+
+
+def test_bad_regions_are_refused():
+    upper, right = _layers()
+    with pytest.raises(dv.InputError, match="'upper' and 'right' overlap|'right' and 'upper'"):
+        dv.mesh.rectangle(2.0, 1.0, 0.1, regions=[upper, right])
+    with pytest.raises(dv.InputError, match="region 'far' leaves the body"):
+        dv.mesh.rectangle(2.0, 1.0, 0.1, regions=[dv.domain.Circle((2.0, 0.5), 0.3, name="far")])
+    mesh = dv.mesh.rectangle(2.0, 1.0, 0.25, regions=[upper])
+    with pytest.raises(dv.InputError, match="unknown region 'lower'; the mesh's regions: 'upper'"):
+        dv.DV(mesh, E, NU, materials={"lower": (1e6, 0.3)})
+    with pytest.raises(dv.InputError, match="BodyForce: unknown region 'lower'"):
+        load_vector(mesh, [dv.BodyForce((0, -1), region="lower")])
+    with pytest.raises(dv.InputError, match="thickness must be > 0, got -1"):
+        dv.DV(mesh, E, NU, thickness=-1)
+
+
+def test_bimaterial_strip_in_series_and_in_parallel():
+    """Two materials with nu / E equal (series: the same lateral strain) or nu equal
+    (parallel: the same strain), so that the exact field is piecewise linear."""
+    upper, right = _layers()
+    E1, nu1, E2, nu2 = 1e5, 0.2, 2e5, 0.4
+    s = 3.0
+    # in series: left half E1, right half E2, uniform sxx = s
+    mesh = dv.mesh.rectangle(2.0, 1.0, 0.05, kind="lattice", regions=[right])
+    x, y = mesh.points.T
+    exact = np.c_[s * (np.minimum(x, 1) / E1 + np.maximum(x - 1, 0) / E2), -nu1 * s * y / E1]
+    sup = [dv.Fix("left", x=0.0), dv.Fix(np.array([np.argmin(np.hypot(x, y))]), y=0.0)]
+    ld = [dv.Traction("right", (s, 0.0))]
+    fe = dv.fem.solve(mesh, E1, nu1, sup, ld, order=2, materials={"right": (E2, nu2)})
+    assert np.abs(fe.u - exact).max() < 1e-9 * np.abs(exact).max()
+    lat = dv.solve(dv.RV(mesh, E1, nu1, materials={"right": (E2, nu2)}), sup, ld)
+    assert np.abs(lat.u - exact).max() < 0.05 * np.abs(exact).max()
+    # in parallel: lower half E1, upper half E2 (same nu), a prescribed stretch
+    mesh = dv.mesh.rectangle(2.0, 1.0, 0.05, kind="lattice", regions=[upper])
+    x, y = mesh.points.T
+    e = 1e-3
+    exact = np.c_[e * x, -nu1 * e * y]
+    sup = [dv.Fix("left", x=0.0), dv.Fix("bottom", y=0.0), dv.Fix("right", x=2 * e)]
+    fe = dv.fem.solve(mesh, E1, nu1, sup, [], order=1, materials={"upper": (E2, nu1)})
+    assert np.abs(fe.u - exact).max() < 1e-9 * np.abs(exact).max()
+    lat = dv.solve(dv.DV(mesh, E1, nu1, materials={"upper": (E2, nu1)}), sup, [])
+    assert np.abs(lat.u - exact).max() < 0.05 * np.abs(exact).max()
+    force = lat.reactions[mesh.part_nodes("right"), 0].sum()
+    assert force == pytest.approx(e * (E1 * 0.5 + E2 * 0.5), rel=0.06)
+
+
+# ---------------------------------------------------------------- plane strain, thickness
+def _cylinder_supports(mesh, b):
+    """Three dofs on the axes: no rigid motion, no reaction for a radial field."""
+    p = mesh.points
+    near = [np.argmin(np.hypot(*(p - q).T)) for q in ([b, 0], [-b, 0], [0, b])]
+    return [dv.Fix(near[:2], y=0.0), dv.Fix(near[2:], x=0.0)]
+
+
+def test_plane_strain_fe_is_plane_stress_with_the_effective_constants():
+    mesh = _annulus(0.1)
+    sup = _cylinder_supports(mesh, 1.0)
+    ld = [dv.Pressure("bore", 1.0), dv.BodyForce((0.2, -0.1))]
+    for nu in (0.2, 0.45):
+        strain = dv.fem.solve(mesh, E, nu, sup, ld, order=2, plane="strain")
+        Es, nus = E / (1 - nu**2), nu / (1 - nu)
+        stress = dv.fem.solve(mesh, Es, nus, sup, ld, order=2)
+        assert np.abs(strain.u - stress.u).max() < 1e-12 * np.abs(stress.u).max()
+
+
+@pytest.mark.parametrize("nu", [0.2, 0.45])
+def test_lame_cylinder_in_plane_strain(nu):
+    a, b, p = 0.4, 1.0, 1.0
+    mesh = _annulus(0.05)
+    sup = _cylinder_supports(mesh, b)
+    fe = dv.fem.solve(mesh, E, nu, sup, [dv.Pressure("bore", p)], order=2, refine=1, plane="strain")
+    bore = mesh.part_nodes("bore")
+    ur = np.einsum("ij,ij->i", fe.u[bore], mesh.points[bore]) / a
+    exact_ur = (1 + nu) * p * a**2 / (E * (b**2 - a**2)) * ((1 - 2 * nu) * a + b**2 / a)
+    assert np.abs(ur / exact_ur - 1).max() < 0.005
+    top = np.array([[0.0, a]])
+    hoop = fe.stress(top)[0, 0, 0]
+    assert hoop == pytest.approx(p * (b**2 + a**2) / (b**2 - a**2), rel=0.005)
+    szz = fe.out_of_plane_stress(top)[0]
+    # szz = lambda (exx + eyy): slower near incompressibility (2.4 % at nu = 0.45)
+    assert szz == pytest.approx(2 * nu * p * a**2 / (b**2 - a**2), rel=0.03)
+
+
+def test_thickness_makes_forces_totals():
+    mesh = dv.mesh.rectangle(2.0, 1.0, 0.1, kind="jittered", seed=1)
+    sup = [dv.Fix("left")]
+    dist = [dv.Traction("right", (0.0, -1.0)), dv.BodyForce((0.0, -2.0))]
+    point = [dv.PointLoad(mesh.part_nodes("right")[:1], (0.0, -1.0))]
+    for solve in (
+        lambda t, ld: dv.solve(dv.DV(mesh, E, NU, thickness=t), sup, ld),
+        lambda t, ld: dv.fem.solve(mesh, E, NU, sup, ld, thickness=t),
+    ):
+        one, three = solve(None, dist), solve(3.0, dist)
+        np.testing.assert_allclose(three.u, one.u, rtol=1e-9, atol=1e-15)
+        one, three = solve(None, point), solve(3.0, point)
+        np.testing.assert_allclose(three.u, one.u / 3.0, rtol=1e-9, atol=1e-15)
+    lat1 = dv.solve(dv.DV(mesh, E, NU), sup, dist)
+    lat3 = dv.solve(dv.DV(mesh, E, NU, thickness=3.0), sup, dist)
+    np.testing.assert_allclose(lat3.reactions, 3.0 * lat1.reactions, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(lat3.stress("virial"), lat1.stress("virial"), rtol=1e-9, atol=1e-9)
+
+
+# ---------------------------------------------------------------- follower pressure
+def _ring():
+    mesh = dv.mesh.disc(1.0, 0.1, name="outer", holes=[dv.domain.Circle((0, 0), 0.6, "bore")])
+    return mesh, _cylinder_supports(mesh, 1.0)
+
+
+def test_follower_pressure_tangent_matches_finite_differences():
+    from dvstatic.problem import FollowerPressures
+    from dvstatic.solvers.newton import SerialProblem
+    from dvstatic.solvers.tangent import DirectTangent
+
+    mesh, sup = _ring()
+    loads = [dv.Pressure("bore", lambda x: 2e3 * (1.0 + x[:, 1]), follower=True)]
+    model = dv.RV(mesh, E, NU)
+    follower = FollowerPressures.from_loads(mesh, loads)
+    dofs, values = dv.problem.constraints(mesh, sup)
+    problem = SerialProblem(
+        model, dofs, values, np.zeros(2 * mesh.n_points), DirectTangent(mesh), follower
+    )
+    rng = np.random.default_rng(0)
+    u = 1e-2 * rng.normal(size=2 * mesh.n_points)
+    lam = 0.7
+    state = problem.evaluate(u, lam)
+    J = problem.jacobian(u, state).tocsr()
+    du = rng.normal(size=u.size)
+    h = 1e-6
+    fd = (problem.evaluate(u + h * du, lam).r_all - problem.evaluate(u - h * du, lam).r_all) / (
+        2 * h
+    )
+    assert np.linalg.norm(J @ du - fd) <= 1e-6 * np.linalg.norm(fd)
+    # the follower part alone is exactly linear in the positions
+    F = follower.tangent(mesh.n_points)
+    x = mesh.points + u.reshape(-1, 2)
+    step = follower.forces(x + du.reshape(-1, 2)) - follower.forces(x)
+    np.testing.assert_allclose(F @ du, step, atol=1e-9 * np.abs(step).max())
+
+
+def test_inflated_ring_with_follower_pressure_converges_quadratically():
+    mesh, sup = _ring()
+    p = 3e3  # about 4 % hoop strain: the bore's normal turns visibly under the load
+    follow = dv.solve(
+        dv.RV(mesh, E, NU), sup, [dv.Pressure("bore", p, follower=True)], nonlinear=True, steps=2
+    )
+    dead = dv.solve(dv.RV(mesh, E, NU), sup, [dv.Pressure("bore", p)], nonlinear=True, steps=2)
+    assert follow.info.converged
+    last = follow.info.steps[-1].residuals
+    r = np.array(last[1:])  # after the predictor
+    r = r[r > 1e-12 * r[0]]
+    rates = np.log(r[2:] / r[1:-1]) / np.log(r[1:-1] / r[:-2])
+    assert rates.max() >= 1.8
+    # following the deformed bore pushes a little harder than the dead load
+    bore = mesh.part_nodes("bore")
+    grow = np.hypot(*(mesh.points[bore] + follow.u[bore]).T).mean()
+    grow_dead = np.hypot(*(mesh.points[bore] + dead.u[bore]).T).mean()
+    assert grow > grow_dead > 0.6
+    # the reactions of the three point supports stay at round-off (self-equilibrated load)
+    assert np.abs(follow.reactions).max() < 1e-6 * p

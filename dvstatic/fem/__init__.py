@@ -29,10 +29,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .._checks import check_int
+from .._checks import check_int, check_positive
 from ..errors import InputError, SingularError
 from ..linalg import DirectSolver, nested_dissection
-from ..material import lame_plane_stress
+from ..material import Elastic, lame_plane_stress
 from ..mesh import Mesh
 from ..problem import (
     BodyForce,
@@ -76,6 +76,8 @@ class FESolution:
         The dof vector of ``basis``.
     fe_mesh : FEMesh
         The refined mesh and its boundary bookkeeping.
+    lame : tuple of ndarray
+        In-plane ``lambda``, ``mu`` and out-of-plane ``lambda_zz`` of every element.
     """
 
     mesh: Mesh
@@ -86,6 +88,7 @@ class FESolution:
     basis: object
     x: np.ndarray
     fe_mesh: FEMesh
+    lame: tuple
 
     def evaluate(self, points) -> np.ndarray:
         """Displacement at arbitrary points inside the mesh, shape (n, 2)."""
@@ -100,14 +103,15 @@ class FESolution:
 
     @cached_property
     def _stress_fields(self):
-        """Element stresses L2-projected onto continuous scalar elements."""
+        """Element stresses (sxx, syy, sxy, szz) L2-projected onto continuous scalar
+        elements."""
         import skfem
 
-        lam, mu = self.info["lame"]
+        lam, mu, lzz = (v[:, None] for v in self.lame)
         g = self.basis.interpolate(self.x).grad  # (2, 2, elements, quadrature points)
         exx, eyy, exy = g[0, 0], g[1, 1], 0.5 * (g[0, 1] + g[1, 0])
         tr = exx + eyy
-        comps = (lam * tr + 2 * mu * exx, lam * tr + 2 * mu * eyy, 2 * mu * exy)
+        comps = (lam * tr + 2 * mu * exx, lam * tr + 2 * mu * eyy, 2 * mu * exy, lzz * tr)
         el = skfem.ElementTriP1() if self.order == 1 else skfem.ElementTriP2()
         sb = self.basis.with_element(el)
         return sb, [sb.project(skfem.DiscreteField(c)) for c in comps]
@@ -116,13 +120,21 @@ class FESolution:
         """Plane-stress Cauchy stress at points, shape (n, 2, 2).
 
         The element stresses are L2-projected onto continuous scalar elements of the
-        same order (smooth nodal stresses), then evaluated at the points.
+        same order (smooth nodal stresses), then evaluated at the points. Stress is force
+        per area (with a thickness, forces were totals and stresses are not).
         """
         p = _points(points)
         sb, vals = self._stress_fields
         probe = _probes(sb, self.fe_mesh, p)
-        sxx, syy, sxy = (probe @ v for v in vals)
+        sxx, syy, sxy = (probe @ v for v in vals[:3])
         return np.stack([np.stack([sxx, sxy], -1), np.stack([sxy, syy], -1)], -2)
+
+    def out_of_plane_stress(self, points) -> np.ndarray:
+        """``szz`` at points, shape (n,): ``lambda (exx + eyy)`` in plane strain (the
+        3-D Lame constant), zero in plane stress."""
+        p = _points(points)
+        sb, vals = self._stress_fields
+        return _probes(sb, self.fe_mesh, p) @ vals[3]
 
 
 def _points(points) -> np.ndarray:
@@ -158,34 +170,42 @@ def solve(
     loads=None,
     order: int = 1,
     refine: int = 0,
+    plane: str = "stress",
+    thickness: float | None = None,
+    materials=None,
 ) -> FESolution:
-    """Plane-stress FE solution with the lattice's supports and loads.
+    """Plane FE solution with the lattice's supports and loads.
 
     Parameters
     ----------
     mesh : Mesh
         Bounded mesh; its triangles are the elements (refined ``refine`` times).
     E, nu : float
-        Young's modulus (> 0) and Poisson's ratio (-1 < nu < 1).
+        Young's modulus (> 0) and Poisson's ratio (-1 < nu < 1; < 0.5 in plane strain).
     supports, loads
         As for :func:`dvstatic.solve`.
     order : {1, 2}
         Lagrange element order (2: quadratic geometry on curved boundaries).
     refine : int
         Uniform refinements (each splits a triangle into four), >= 0.
+    plane, thickness, materials
+        As for :class:`dvstatic.DV`: plane strain uses the 3-D Lame constants
+        ``lambda = E nu / ((1 + nu)(1 - 2 nu))``; the thickness multiplies the
+        stiffness and the distributed loads; ``materials`` maps region names of the
+        mesh to ``(E, nu)``.
 
     Returns
     -------
     FESolution
     """
     import skfem
-    from skfem.models.elasticity import linear_elasticity
 
     if not isinstance(mesh, Mesh):
         raise TypeError(f"mesh must be a dvstatic Mesh, got {type(mesh).__name__}")
     if mesh.is_periodic:
         raise InputError("the FE reference needs a bounded mesh", "mesh")
-    lam, mu = lame_plane_stress(E, nu)
+    table = _materials(mesh, Elastic(E, nu, plane), materials)
+    t = 1.0 if thickness is None else check_positive("thickness", thickness)
     order = check_int("order", order, minimum=1, maximum=2)
     refine = check_int("refine", refine, minimum=0, maximum=8)
     t0 = time.perf_counter()
@@ -193,8 +213,9 @@ def solve(
     elem = skfem.ElementVector(skfem.ElementTriP1() if order == 1 else skfem.ElementTriP2())
     basis = skfem.Basis(fe.skfem, elem)
     t1 = time.perf_counter()
-    K = skfem.asm(linear_elasticity(lam, mu), basis)
-    f = _load_vector(mesh, fe, elem, basis, loads)
+    lame = _element_lame(mesh, fe, table)
+    K = t * skfem.asm(_elasticity(), basis, **_fields(basis, lame[:2]))
+    f = _load_vector(mesh, fe, elem, basis, loads, t)
     D, vals = _prescribed(mesh, fe, basis, supports)
     x = np.zeros(basis.N)
     x[D] = vals
@@ -207,12 +228,68 @@ def solve(
     info = {
         "n_dof": int(basis.N),
         "n_elements": int(fe.triangles.shape[0]),
-        "lame": (lam, mu),
+        "lame": (float(lame[0][0]), float(lame[1][0])),
+        "plane": plane,
+        "thickness": t,
         "load_resultant": _resultant(basis, f),
         "seconds": {"mesh": t1 - t0, "assembly": t2 - t1, "solve": t3 - t2, "total": t3 - t0},
     }
     log.info("FE P%d refine=%d: %d dof in %.3f s", order, refine, basis.N, t3 - t0)
-    return FESolution(mesh, u, order, refine, info, basis, x, fe)
+    return FESolution(mesh, u, order, refine, info, basis, x, fe, lame)
+
+
+def _materials(mesh: Mesh, default: Elastic, materials) -> list[Elastic]:
+    """The default material, then one per named region (checked against the mesh)."""
+    out = [default]
+    for name, value in (materials or {}).items():
+        if name not in mesh.regions:
+            known = ", ".join(repr(k) for k in mesh.regions) or "none"
+            raise InputError(
+                f"materials: unknown region {name!r}; the mesh's regions: {known}", "materials"
+            )
+        E, nu = value
+        out.append((name, Elastic(E, nu, default.plane)))
+    return out
+
+
+def _element_lame(mesh: Mesh, fe: FEMesh, table) -> tuple[np.ndarray, ...]:
+    """In-plane Lame constants (lambda, mu) and the out-of-plane ``lambda_zz`` (0 in
+    plane stress) of every FE element, each shape (n_elements,)."""
+    default = table[0]
+    coarse = np.zeros(mesh.n_triangles, dtype=np.int64)
+    for k, (name, _) in enumerate(table[1:], start=1):
+        coarse[mesh.regions[name]] = k
+    mats = [default] + [m for _, m in table[1:]]
+    lam, mu, lzz = (np.array(v) for v in zip(*(_lame(m) for m in mats), strict=True))
+    k = coarse[fe.parent_triangle]
+    return lam[k], mu[k], lzz[k]
+
+
+def _lame(m: Elastic) -> tuple[float, float, float]:
+    mu = m.E / (2.0 * (1.0 + m.nu))
+    if m.plane == "stress":
+        return m.E * m.nu / (1.0 - m.nu**2), mu, 0.0
+    lam = m.E * m.nu / ((1.0 + m.nu) * (1.0 - 2.0 * m.nu))  # the 3-D constant
+    return lam, mu, lam
+
+
+def _fields(basis, per_element) -> dict:
+    """Per-element constants as quadrature-point fields (n_elements, n_points)."""
+    nqp = basis.X.shape[1]
+    lam, mu = per_element
+    return {"lam": np.repeat(lam[:, None], nqp, axis=1), "mu": np.repeat(mu[:, None], nqp, axis=1)}
+
+
+def _elasticity():
+    import skfem
+    from skfem.helpers import ddot, sym_grad, trace
+
+    @skfem.BilinearForm
+    def form(u, v, w):
+        eu, ev = sym_grad(u), sym_grad(v)
+        return w.lam * trace(eu) * trace(ev) + 2.0 * w.mu * ddot(eu, ev)
+
+    return form
 
 
 def _resultant(basis, f: np.ndarray) -> tuple[float, float]:
@@ -239,9 +316,10 @@ def _facets_of(mesh: Mesh, fe: FEMesh, edges: np.ndarray) -> np.ndarray:
     return bf[chosen[fe.parent[fe.facet_index(bf)]]]
 
 
-def _load_vector(mesh: Mesh, fe: FEMesh, elem, basis, loads) -> np.ndarray:
+def _load_vector(mesh: Mesh, fe: FEMesh, elem, basis, loads, t: float = 1.0) -> np.ndarray:
     """Consistent load vector: tractions and pressures integrated along the facets of
-    their edges, body forces over the elements, point loads on the lattice nodes."""
+    their edges, body forces over the elements (times the thickness ``t``), point loads
+    on the lattice nodes."""
     import skfem
 
     f = np.zeros(basis.N)
@@ -250,9 +328,11 @@ def _load_vector(mesh: Mesh, fe: FEMesh, elem, basis, loads) -> np.ndarray:
             what = type(load).__name__
             edges = select_edges(mesh, load.where, what)
             fb = skfem.FacetBasis(fe.skfem, elem, facets=_facets_of(mesh, fe, edges))
-            f += skfem.asm(_boundary_form(load), fb)
+            f += t * skfem.asm(_boundary_form(load), fb)
         elif isinstance(load, BodyForce):
-            f += skfem.asm(_vector_form(load.value, "BodyForce"), basis)
+            f += t * skfem.asm(
+                _vector_form(load.value, "BodyForce"), _body_basis(mesh, fe, basis, load)
+            )
         elif isinstance(load, PointLoad):
             nodes = select_nodes(mesh, load.nodes, "PointLoad")
             for c in range(2):
@@ -260,6 +340,21 @@ def _load_vector(mesh: Mesh, fe: FEMesh, elem, basis, loads) -> np.ndarray:
         else:
             raise TypeError(f"unknown load type {type(load).__name__}")
     return f
+
+
+def _body_basis(mesh: Mesh, fe: FEMesh, basis, load: BodyForce):
+    """The basis of the body force's elements (all, or those of its region)."""
+    import skfem
+
+    if load.region is None:
+        return basis
+    if load.region not in mesh.regions:
+        known = ", ".join(repr(k) for k in mesh.regions) or "none"
+        raise InputError(
+            f"BodyForce: unknown region {load.region!r}; the mesh's regions: {known}", "region"
+        )
+    inside = np.isin(fe.parent_triangle, mesh.regions[load.region])
+    return skfem.Basis(fe.skfem, basis.elem, elements=np.flatnonzero(inside))
 
 
 def _at(w) -> np.ndarray:

@@ -18,6 +18,7 @@ A model is its calibration (:attr:`VoronoiModel.micro`) plus the
 from __future__ import annotations
 
 import logging
+from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import cached_property
 from typing import TYPE_CHECKING, ClassVar
@@ -27,7 +28,7 @@ import numpy as np
 from .._checks import as_displacement, check_choice, check_positive
 from .._env import launched_under_mpi
 from ..errors import InputError
-from ..material import check_poisson
+from ..material import Elastic
 from ..mesh import Mesh
 from . import calibration
 from . import geometry as _geometry
@@ -51,25 +52,42 @@ class VoronoiModel:
     ----------
     mesh : Mesh
     E : float
-        Young's modulus of the plane-stress continuum (force per area), > 0.
+        Young's modulus (force per area), > 0.
     nu : float
-        Poisson's ratio, in the calibration's admissible range (within (-1, 1)).
+        Poisson's ratio: -1 < nu < 1 in plane stress, -1 < nu < 0.5 in plane strain
+        (within the calibration's admissible range).
     calibration : {"paper", "relaxed"} or MicroParameters
         How ``k_n`` and ``nu_m`` are obtained from E and nu: ``"paper"`` (closed
         form under affine strain, eqs. 9-10 / 19-20), ``"relaxed"`` (the equilibrium,
         non-affinely relaxed response of a periodic sample with the mesh's bond-length
         spread matches E and nu; see :func:`dvstatic.lattice.calibration.relaxed`), or
-        given :class:`~dvstatic.lattice.calibration.MicroParameters` (used as they are).
+        given :class:`~dvstatic.lattice.calibration.MicroParameters` (used as they are;
+        a sequence of them with ``materials``: the default material's first).
     bonds : {"uniform", "voronoi"}
         Normal-spring stiffness of each bond: the paper's uniform ``k_n``, or
         ``k_n w_e`` with ``w_e = sqrt(3) r_e / l_e`` (its own Voronoi side: 1 inside a
         regular lattice, 1/2 on its surface bonds), which removes the stiff surface
-        layer. The Voronoi coupling stays uniform, so the stiffness stays symmetric.
+        layer. The Voronoi coupling stays per triangle, so the stiffness stays symmetric.
+    plane : {"stress", "strain"}
+        Plane stress, or plane strain: the lattice is calibrated with the effective
+        constants ``E* = E / (1 - nu^2)``, ``nu* = nu / (1 - nu)``; the stress recovery
+        reports ``szz = nu (sxx + syy)``.
+    thickness : float, optional
+        Out-of-plane thickness (length). Without it everything is per unit thickness;
+        with it the stiffness is multiplied by it and forces (loads, reactions, bond
+        tensions) are totals: tractions, pressures and body forces stay per unit area
+        and volume, point loads are total forces.
+    materials : mapping region name -> (E, nu), optional
+        Other materials on named regions of the mesh (``mesh.regions``); ``E, nu``
+        are the material of the other triangles. Every material is calibrated on its
+        own; a bond between two triangles of different materials gets the springs of
+        both, each in proportion to its triangle's share of the bond's Voronoi side,
+        and every triangle its own coupling, so that the stiffness stays symmetric.
 
     Raises
     ------
     InputError
-        E or nu out of range, unknown calibration or bonds.
+        E, nu or thickness out of range, unknown calibration, bonds, plane or region.
     CalibrationError
         nu has no calibration on this mesh (raised at construction, except under
         ``mpiexec``, where the distributed engine calibrates from sums over ranks).
@@ -80,6 +98,9 @@ class VoronoiModel:
     nu: float
     calibration: object = "paper"
     bonds: str = "uniform"
+    plane: str = "stress"
+    thickness: float | None = None
+    materials: object = None
     kind: ClassVar[str] = ""
     barycentric_images: ClassVar[bool] = True
 
@@ -88,17 +109,56 @@ class VoronoiModel:
             raise TypeError("use dvstatic.DV or dvstatic.RV")
         if not isinstance(self.mesh, Mesh):
             raise TypeError(f"mesh must be a dvstatic Mesh, got {type(self.mesh).__name__}")
-        E = check_positive("E", self.E)
-        nu = check_poisson(self.nu)
-        if not isinstance(self.calibration, calibration.MicroParameters):
-            check_choice("calibration", self.calibration, calibration.CALIBRATIONS)
+        material = Elastic(self.E, self.nu, self.plane)
+        object.__setattr__(self, "E", material.E)
+        object.__setattr__(self, "nu", material.nu)
         check_choice("bonds", self.bonds, BONDS)
-        object.__setattr__(self, "E", E)
-        object.__setattr__(self, "nu", nu)
+        if self.thickness is not None:
+            object.__setattr__(self, "thickness", check_positive("thickness", self.thickness))
+        object.__setattr__(self, "materials", self._checked_materials())
+        self._check_calibration()
         if not launched_under_mpi():
             _ = self.micro  # calibrate now: an impossible nu fails at construction
         # under mpiexec the calibration waits: solver="petsc" computes it from sums
         # over each rank's own bonds (set_micro), so no rank needs the global geometry
+
+    def _checked_materials(self) -> dict[str, Elastic]:
+        if self.materials is None:
+            return {}
+        if not isinstance(self.materials, Mapping):
+            raise TypeError("materials must map region names to (E, nu)")
+        out = {}
+        for name, value in self.materials.items():
+            if name not in self.mesh.regions:
+                known = ", ".join(repr(k) for k in self.mesh.regions) or "none"
+                raise InputError(
+                    f"materials: unknown region {name!r}; the mesh's regions: {known}",
+                    "materials",
+                )
+            if isinstance(value, Elastic):
+                value = (value.E, value.nu)
+            try:
+                E, nu = value
+            except (TypeError, ValueError):
+                raise TypeError(f"materials[{name!r}] must be (E, nu), got {value!r}") from None
+            out[str(name)] = Elastic(E, nu, self.plane)
+        return out
+
+    def _check_calibration(self) -> None:
+        cal = self.calibration
+        if isinstance(cal, calibration.MicroParameters):
+            cal = (cal,)
+        if isinstance(cal, (tuple, list)):
+            if len(cal) != 1 + len(self.materials) or not all(
+                isinstance(c, calibration.MicroParameters) for c in cal
+            ):
+                n = 1 + len(self.materials)
+                raise InputError(
+                    f"calibration: give one MicroParameters per material ({n})", "calibration"
+                )
+            object.__setattr__(self, "calibration", tuple(cal) if len(cal) > 1 else cal[0])
+            return
+        check_choice("calibration", self.calibration, calibration.CALIBRATIONS)
 
     # ------------------------------------------------------------ parameters
     @cached_property
@@ -106,32 +166,73 @@ class VoronoiModel:
         """Reference geometry (shared by all models on the same mesh)."""
         return _geometry.of(self.mesh)
 
+    @property
+    def material(self) -> Elastic:
+        """The material of the triangles outside the ``materials`` regions."""
+        return Elastic(self.E, self.nu, self.plane)
+
+    @property
+    def all_materials(self) -> tuple[Elastic, ...]:
+        """The default material, then those of ``materials`` in their order."""
+        return (self.material, *self.materials.values())
+
+    @property
+    def t(self) -> float:
+        """The thickness (1 when the model is per unit thickness)."""
+        return 1.0 if self.thickness is None else float(self.thickness)
+
+    @cached_property
+    def material_of_triangle(self) -> np.ndarray:
+        """Index of every triangle's material in :attr:`all_materials`, shape (M,)."""
+        out = np.zeros(self.mesh.n_triangles, dtype=np.int64)
+        for k, name in enumerate(self.materials, start=1):
+            out[self.mesh.regions[name]] = k
+        out.setflags(write=False)
+        return out
+
     @cached_property
     def micro(self) -> calibration.MicroParameters:
-        """Calibrated micro-parameters with the moments they came from."""
-        if isinstance(self.calibration, calibration.MicroParameters):
-            return self.calibration
-        if self.calibration == "relaxed":
-            return calibration.relaxed(self.kind, self.mesh, self.E, self.nu, self.bonds)
-        return calibration.paper(
-            self.kind, self.mesh, self.geometry, self.E, self.nu, self.bond_weight
-        )
+        """Calibrated micro-parameters (of the default material) with the moments they
+        came from."""
+        return self.micros[0]
 
-    def set_micro(self, micro: calibration.MicroParameters) -> None:
+    @cached_property
+    def micros(self) -> tuple[calibration.MicroParameters, ...]:
+        """Calibrated micro-parameters of every material (:attr:`all_materials`)."""
+        if "micro" in self.__dict__ and not self.materials:
+            return (self.__dict__["micro"],)
+        if isinstance(self.calibration, calibration.MicroParameters):
+            return (self.calibration,)
+        if isinstance(self.calibration, tuple):
+            return self.calibration
+        return tuple(self._calibrate(m) for m in self.all_materials)
+
+    def _calibrate(self, material: Elastic) -> calibration.MicroParameters:
+        E2, nu2 = material.in_plane
+        if self.calibration == "relaxed":
+            return calibration.relaxed(self.kind, self.mesh, E2, nu2, self.bonds)
+        return calibration.paper(self.kind, self.mesh, self.geometry, E2, nu2, self.bond_weight)
+
+    def set_micro(self, micro) -> None:
         """Adopt micro-parameters computed elsewhere (the distributed engine sums the
-        calibration over ranks). Allowed once, before the model is calibrated."""
-        if not isinstance(micro, calibration.MicroParameters):
-            raise TypeError(f"micro must be MicroParameters, got {type(micro).__name__}")
+        calibration over ranks): one MicroParameters, or one per material. Allowed
+        once, before the model is calibrated."""
+        micros = (micro,) if isinstance(micro, calibration.MicroParameters) else tuple(micro)
+        if len(micros) != 1 + len(self.materials) or not all(
+            isinstance(m, calibration.MicroParameters) for m in micros
+        ):
+            raise TypeError("micro must be MicroParameters (one per material)")
         if self.is_calibrated:
-            if self.micro != micro:
+            if self.micros != micros:
                 raise InputError("the model is calibrated already, with other parameters", "micro")
             return
-        self.__dict__["micro"] = micro  # the cached_property's slot
+        self.__dict__["micros"] = micros  # the cached_properties' slots
+        self.__dict__["micro"] = micros[0]
 
     @property
     def is_calibrated(self) -> bool:
-        """True once :attr:`micro` has been computed (or set)."""
-        return "micro" in self.__dict__
+        """True once the micro-parameters have been computed (or set)."""
+        return "micro" in self.__dict__ or "micros" in self.__dict__
 
     @cached_property
     def bond_weight(self) -> np.ndarray:
@@ -141,20 +242,28 @@ class VoronoiModel:
 
     @cached_property
     def operator(self) -> LatticeOperator:
-        """Forces and matrices of this lattice (its calibrated stiffnesses)."""
-        k_n, nu_m = self.micro.k_n, self.micro.nu_m
-        return LatticeOperator(
-            self.mesh, k_n * self.bond_weight, k_n * nu_m, barycentric=self.barycentric_images
-        )
+        """Forces and matrices of this lattice (its calibrated stiffnesses, times the
+        thickness)."""
+        k_n = np.array([m.k_n for m in self.micros])
+        nu_m = np.array([m.nu_m for m in self.micros])
+        mat = self.material_of_triangle
+        coupling = self.t * k_n[mat] * nu_m[mat]
+        if len(self.micros) == 1:
+            spring = self.t * k_n[0] * self.bond_weight
+            coupling = self.t * k_n[0] * nu_m[0]
+        else:
+            spring = self.t * self.bond_weight * _bond_mix(self.geometry, self.mesh, k_n[mat])
+        return LatticeOperator(self.mesh, spring, coupling, barycentric=self.barycentric_images)
 
     @property
     def k_n(self) -> float:
-        """Bond stiffness (units of E: force per unit length per unit thickness)."""
+        """Bond stiffness of the default material (units of E: force per unit length per
+        unit thickness)."""
         return self.micro.k_n
 
     @property
     def nu_m(self) -> float:
-        """Voronoi coupling coefficient (dimensionless)."""
+        """Voronoi coupling coefficient of the default material (dimensionless)."""
         return self.micro.nu_m
 
     @property
@@ -227,11 +336,30 @@ class VoronoiModel:
         return float(0.5 * x @ (self.operator.stiffness_bsr @ x))
 
     def __repr__(self) -> str:
+        extra = "" if self.plane == "stress" else ", plane='strain'"
+        extra += "" if self.thickness is None else f", thickness={self.thickness:g}"
+        extra += f", materials={list(self.materials)}" if self.materials else ""
         return (
             f"{self.kind}(N={self.mesh.n_points}, E={self.E:g}, nu={self.nu:g}, "
             f"k_n={self.k_n:.6g}, nu_m={self.nu_m:.6g}, calibration={self.micro.calibration!r}, "
-            f"bonds={self.bonds!r})"
+            f"bonds={self.bonds!r}{extra})"
         )
+
+
+def _bond_mix(geom: _geometry.Geometry, mesh: Mesh, k_tri: np.ndarray) -> np.ndarray:
+    """Spring stiffness of every bond from its triangles' ``k_tri`` (M,), each in
+    proportion to its (non-negative) share of the bond's Voronoi side; equal shares
+    where the side vanishes. Shape (n_bonds,)."""
+    topo = mesh.topology
+    bt, bl = topo.bond_tris, topo.bond_local
+    two = bt[:, 1] >= 0
+    r1 = np.maximum(geom.tri_r[bt[:, 0], bl[:, 0]], 0.0)
+    t2, l2 = np.maximum(bt[:, 1], 0), np.maximum(bl[:, 1], 0)
+    r2 = np.where(two, np.maximum(geom.tri_r[t2, l2], 0.0), 0.0)
+    total = r1 + r2
+    s1 = np.where(total > 0, r1 / np.where(total > 0, total, 1.0), np.where(two, 0.5, 1.0))
+    k2 = np.where(two, k_tri[t2], 0.0)
+    return s1 * k_tri[bt[:, 0]] + (1.0 - s1) * k2
 
 
 @dataclass(frozen=True, eq=False, repr=False)

@@ -10,10 +10,9 @@ from __future__ import annotations
 import numpy as np
 
 from .._checks import as_displacement
-from ..material import plane_stress_from_strain
 from .models import VoronoiModel
 
-__all__ = ["bond_state", "node_stress", "strain_stress", "check_model"]
+__all__ = ["bond_state", "node_stress", "strain_stress", "out_of_plane_stress", "check_model"]
 
 
 def check_model(model) -> VoronoiModel:
@@ -60,7 +59,7 @@ def node_stress(model: VoronoiModel, u, linear: bool = True) -> np.ndarray:
         out[:, c] = np.bincount(b[:, 0], hv[:, c], n) + np.bincount(b[:, 1], hv[:, c], n)
     g = model.geometry
     area = np.where(g.cell_area > 0.25 * g.dual_area, g.cell_area, g.dual_area)
-    return (out / area[:, None]).reshape(n, 2, 2)
+    return (out / (model.t * area[:, None])).reshape(n, 2, 2)
 
 
 def strain_stress(model: VoronoiModel, u) -> np.ndarray:
@@ -68,7 +67,8 @@ def strain_stress(model: VoronoiModel, u) -> np.ndarray:
 
     The displacement is interpolated linearly on each triangle, the triangle strains
     are averaged to the nodes (weighted by triangle area) and mapped through the
-    plane-stress law of the model's E and nu. Unlike the virial (force-based) stress,
+    plane-stress law of the model's E and nu (each triangle's own material, and the
+    effective constants in plane strain). Unlike the virial (force-based) stress,
     this does not see the extra force the paper's uniform ``k_n`` puts into the
     surface bonds (about 1.7x the true stress parallel to a free edge of a lattice), so
     it is the better estimate of surface stresses such as stress concentrations.
@@ -90,14 +90,32 @@ def strain_stress(model: VoronoiModel, u) -> np.ndarray:
     du1, du2 = ut[:, 1] - ut[:, 0], ut[:, 2] - ut[:, 0]
     grad = du1[:, :, None] * g1[:, None, :] + du2[:, :, None] * g2[:, None, :]  # (M, 2, 2)
     eps = 0.5 * (grad + grad.transpose(0, 2, 1))
-    area = model.geometry.tri_area
+    sig = np.empty_like(eps)
+    for k, material in enumerate(model.all_materials):
+        sel = model.material_of_triangle == k
+        sig[sel] = material.stress(eps[sel])
+    return _to_nodes(mesh, model.geometry.tri_area, sig.reshape(-1, 4)).reshape(-1, 2, 2)
+
+
+def _to_nodes(mesh, area: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """Area-weighted average of triangle values (M, k) at the nodes, (N, k)."""
     n = mesh.n_points
-    acc = np.zeros((n, 4))
+    acc = np.zeros((n, values.shape[1]))
     w = np.zeros(n)
     for v in range(3):
         idx = mesh.triangles[:, v]
         w += np.bincount(idx, area, n)
-        for c in range(4):
-            acc[:, c] += np.bincount(idx, area * eps.reshape(-1, 4)[:, c], n)
-    e = (acc / w[:, None]).reshape(n, 2, 2)
-    return plane_stress_from_strain(e, model.E, model.nu)
+        for c in range(values.shape[1]):
+            acc[:, c] += np.bincount(idx, area * values[:, c], n)
+    return acc / w[:, None]
+
+
+def out_of_plane_stress(model: VoronoiModel, sigma: np.ndarray) -> np.ndarray:
+    """``szz`` at the nodes for in-plane nodal stresses ``sigma`` (N, 2, 2): zero in plane
+    stress, ``nu (sxx + syy)`` in plane strain (``nu`` area-averaged over the node's
+    triangles where materials meet), shape (N,)."""
+    if model.plane == "stress":
+        return np.zeros(model.mesh.n_points)
+    nus = np.array([m.nu for m in model.all_materials])[model.material_of_triangle]
+    nu = _to_nodes(model.mesh, model.geometry.tri_area, nus[:, None])[:, 0]
+    return nu * (sigma[:, 0, 0] + sigma[:, 1, 1])

@@ -373,7 +373,10 @@ class Mesh:
             nodes = nodes[np.lexsort((t, k))]
             a, b = nodes, np.roll(nodes, -1)
             both = d[a] & d[b]
-            out.append(np.c_[a, b, k0 + np.argmax(both, axis=1)])
+            # the segments that run inside the body (not along the boundary)
+            dist, _ = self.domain.curve_distances(0.5 * (p[a] + p[b]))
+            inside = both.any(axis=1) & (dist.min(axis=1) > tol)
+            out.append(np.c_[a, b, k0 + np.argmax(both, axis=1)][inside])
             k0 += len(curves)
         return np.vstack(out).astype(np.int64)
 

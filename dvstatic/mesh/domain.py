@@ -278,25 +278,25 @@ class Domain:
         names = [r.region_name for r in self.regions]
         if len(set(names)) != len(names):
             raise InputError(f"region names must be different, got {names}", "regions")
+        tol = 1e-9 * self.scale
         for i, region in enumerate(self.regions):
             probe = region.samples()
             name = region.region_name
             d, _ = self.curve_distances(probe)
-            if not np.all(self.contains(probe)) or np.any(d.min(axis=1) < 1e-9 * self.scale):
+            if not np.all(self.contains(probe) | (d.min(axis=1) <= tol)):
                 raise InputError(
-                    f"region {name!r} is not strictly inside the body (it leaves the domain, "
-                    "crosses a hole or touches the boundary)",
+                    f"region {name!r} leaves the body (its boundary must lie inside the "
+                    "domain or on its boundary, outside the holes)",
                     "regions",
                 )
             for hole in self.holes:
-                if (
-                    np.any(hole.contains(probe))
-                    or np.any(region.contains(hole.samples()))
-                    and not (np.all(region.contains(hole.samples())))
-                ):
+                inside = region.contains(hole.samples())
+                if inside.any() and not inside.all():
                     raise InputError(f"region {name!r} crosses a hole", "regions")
+            mine = _interior_samples(region)
             for other in self.regions[:i]:
-                if np.any(other.contains(probe)) or np.any(region.contains(other.samples())):
+                theirs = _interior_samples(other)
+                if np.any(other.contains(mine)) or np.any(region.contains(theirs)):
                     raise InputError(
                         f"regions {other.region_name!r} and {name!r} overlap", "regions"
                     )
@@ -360,6 +360,11 @@ class Domain:
         if not self.regions:
             return np.zeros((len(p), 0))
         return np.hstack([loop.distances(p) for loop in self.regions])
+
+    def boundary_corners(self) -> np.ndarray:
+        """Points where two boundary curves meet, shape (k, 2)."""
+        pts = [c.start for loop in self.loops for c in loop.pieces() if not c.closed]
+        return np.array(pts) if pts else np.zeros((0, 2))
 
     def corners(self) -> np.ndarray:
         """Points where two curves meet (polygon vertices, path joints), shape (k, 2)."""
@@ -548,6 +553,17 @@ def rectangle_domain(width: float, height: float) -> Domain:
     """Axis-aligned rectangle [0, width] x [0, height], edges bottom/right/top/left."""
     v = np.array([[0.0, 0.0], [width, 0.0], [width, height], [0.0, height]])
     return Domain(Polygon(v, ("bottom", "right", "top", "left")))
+
+
+def _interior_samples(loop, n: int = 48) -> np.ndarray:
+    """Grid points strictly inside a loop (away from its curves)."""
+    v = loop.samples()
+    lo, hi = v.min(axis=0), v.max(axis=0)
+    g = np.stack(np.meshgrid(*(np.linspace(lo[k], hi[k], n + 2)[1:-1] for k in range(2))), -1)
+    g = g.reshape(-1, 2)
+    g = g[loop.contains(g)]
+    away = loop.distances(g).min(axis=1) > 1e-6 * float(np.max(hi - lo))
+    return g[away]
 
 
 def _check_used(points: np.ndarray, tri: np.ndarray) -> None:

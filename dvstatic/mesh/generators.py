@@ -175,36 +175,106 @@ def _triangulated(domain: Domain, pts: np.ndarray, h: float, kind: str) -> Mesh:
     """The mesh of ``pts`` in ``domain``: region curves added (points near them
     removed), Morton order, Lloyd iterations for ``cvt``, conforming Delaunay
     triangulation."""
+    segments = None
     n_fixed = 0
     if domain.regions:
-        rp, ra, rb = _loop_points(domain.regions, h)
-        far = domain.region_distances(pts).min(axis=1) >= 0.45 * h
-        pts = np.vstack([rp, _gabriel(pts[far], ra, rb)])
+        rp, segments = _region_points(domain, h)
+        pts = _clear_around(domain, pts, rp, h)
+        pts = np.vstack([rp, _gabriel(pts, rp[segments[:, 0]], rp[segments[:, 1]])])
         n_fixed = len(rp)
     order = np.concatenate([np.arange(n_fixed), n_fixed + spatial_order(pts[n_fixed:])])
     pts = pts[order]
     if kind == "cvt":
         pts = lloyd(domain, pts, h)
-    segments = _region_segments(domain, h) if domain.regions else None
     pts, tri, parts, regions = domain.triangulate(pts, 1e-9 * h, segments=segments)
     mesh = Mesh(pts, tri, parts=parts, regions=regions, domain=domain)
     log.debug("generated %s mesh: %r", kind, mesh)
     return mesh
 
 
-def _region_segments(domain: Domain, h: float) -> np.ndarray:
-    """Consecutive region points (the first points of the point list) as segments with
-    the index of their region curve, shape (s, 3)."""
-    out, start, k = [], 0, 0
+def _region_points(domain: Domain, h: float) -> tuple[np.ndarray, np.ndarray]:
+    """Points along the region curves inside the body (spacing about h, none within
+    0.45 h of the boundary), plus the region corners that lie on the boundary; and the
+    segments between consecutive points that run inside the body, (s, 3): two point
+    indices and the index of their region curve."""
+    tol = 1e-9 * h
+    pts, segs, k0 = [], [], 0
+    n = 0
     for loop in domain.regions:
-        counts = [len(c.spaced(h)) for c in loop.pieces()]
-        n = sum(counts)
-        ids = start + np.arange(n)
-        curve = k + np.repeat(np.arange(len(counts)), counts)
-        out.append(np.c_[ids, np.roll(ids, -1), curve])
-        start += n
-        k += len(counts)
-    return np.vstack(out).astype(np.int64)
+        curves = loop.pieces()
+        keep_pts, keep_curve = [], []
+        for k, c in enumerate(curves):
+            p = c.spaced(h)
+            d = _distance_to_domain_boundary(domain, p)
+            corner = np.zeros(len(p), dtype=bool)
+            corner[0] = not c.closed  # the curve's start is a corner of the loop
+            ok = (d >= 0.45 * h) | (corner & (d <= tol))
+            keep_pts.append(p[ok])
+            keep_curve.append(np.full(int(ok.sum()), k0 + k))
+        p = np.vstack(keep_pts)
+        curve = np.concatenate(keep_curve)
+        ids = n + np.arange(len(p))
+        nxt = np.roll(np.arange(len(p)), -1)
+        # a segment runs along the curve of its first point (a corner ends that curve):
+        # kept where its end lies on that curve too and it runs inside the body
+        on_curve = np.array(
+            [
+                curves[c - k0].distance(p[j : j + 1])[0] <= tol
+                for c, j in zip(curve, nxt, strict=True)
+            ]
+        )
+        mid = 0.5 * (p + p[nxt])
+        inside = on_curve & (_distance_to_domain_boundary(domain, mid) > tol)
+        pts.append(p)
+        segs.append(np.c_[ids, ids[nxt], curve][inside])
+        n += len(p)
+        k0 += len(curves)
+    return np.vstack(pts), np.vstack(segs).astype(np.int64)
+
+
+def _clear_around(domain: Domain, pts: np.ndarray, rp: np.ndarray, h: float) -> np.ndarray:
+    """``pts`` without the points within 0.45 h of a region curve: interior points, and
+    boundary points (other than the domain's corners) near a region point on the
+    boundary or near a region curve that runs inside the body."""
+    tol = 1e-9 * h
+    on_bnd = _distance_to_domain_boundary(domain, pts) <= tol
+    far = domain.region_distances(pts).min(axis=1) >= 0.45 * h
+    bnd_rp = rp[_distance_to_domain_boundary(domain, rp) <= tol]
+    if on_bnd.any():
+        idx = np.flatnonzero(on_bnd)
+        # near a region curve that runs along the boundary is fine; near one that
+        # leaves it (or near a region point on the boundary) is not
+        inner = _inner_region_distance(domain, pts[idx], h)
+        near_rp = _near(pts[idx], bnd_rp, 0.45 * h)
+        corner = _near(pts[idx], domain.boundary_corners(), tol)
+        far[idx] = ((inner >= 0.45 * h) & ~near_rp) | corner
+        far[idx] &= ~_near(pts[idx], bnd_rp, tol)  # the region's own point replaces it
+    return pts[far]
+
+
+def _inner_region_distance(domain: Domain, p: np.ndarray, h: float) -> np.ndarray:
+    """Distance of points to the parts of the region curves inside the body (sampled
+    at spacing h / 8), (n,)."""
+    samples = np.vstack([c.spaced(h / 8) for c in domain.region_curves()])
+    samples = samples[_distance_to_domain_boundary(domain, samples) > 1e-9 * h]
+    if not len(samples):
+        return np.full(len(p), np.inf)
+    from scipy.spatial import cKDTree
+
+    d, _ = cKDTree(samples).query(p)
+    return d
+
+
+def _near(p: np.ndarray, q: np.ndarray, tol: float) -> np.ndarray:
+    """Which points ``p`` lie within ``tol`` of one of ``q``, (n,) bool."""
+    if not len(q) or not len(p):
+        return np.zeros(len(p), dtype=bool)
+    return np.min(np.hypot(*(p[:, None, :] - q[None]).transpose(2, 0, 1)), axis=1) <= tol
+
+
+def _distance_to_domain_boundary(domain: Domain, p: np.ndarray) -> np.ndarray:
+    d, _ = domain.curve_distances(p)
+    return d.min(axis=1)
 
 
 def polygon(

@@ -154,7 +154,8 @@ def layout(mesh: Mesh, rank: int, size: int) -> Layout:
     mask[owned] = True
     ring1 = np.zeros(n, dtype=bool)
     ring1[tri[mask[tri].any(axis=1)].ravel()] = True
-    patch_tri = tri[ring1[tri].any(axis=1)]
+    patch_idx = np.flatnonzero(ring1[tri].any(axis=1))
+    patch_tri = tri[patch_idx]
     in_patch = np.zeros(n, dtype=bool)
     in_patch[patch_tri.ravel()] = True
     in_patch[owned] = False
@@ -162,7 +163,8 @@ def layout(mesh: Mesh, rank: int, size: int) -> Layout:
     local_nodes = np.concatenate([owned, ghosts[np.argsort(new_of[ghosts], kind="stable")]])
     local_of = np.full(n, -1, dtype=np.int64)
     local_of[local_nodes] = np.arange(len(local_nodes))
-    patch = Mesh(mesh.points[local_nodes], local_of[patch_tri])
+    regions = {k: np.flatnonzero(np.isin(patch_idx, v)) for k, v in mesh.regions.items()}
+    patch = Mesh(mesh.points[local_nodes], local_of[patch_tri], regions=regions)
     return Layout(rank, size, new_of, starts, local_nodes, patch, len(owned))
 
 
@@ -182,29 +184,32 @@ def owned_triangles(lay: Layout) -> np.ndarray:
     return (first >= lay.lo) & (first < lay.starts[lay.rank + 1])
 
 
-def micro_parameters(model, lay: Layout, allreduce):
-    """Calibrated micro-parameters from sums over this rank's own bonds and triangles.
+def micro_parameters(model, lay: Layout, allreduce) -> tuple:
+    """Calibrated micro-parameters of every material of ``model`` from sums over this
+    rank's own bonds and triangles.
 
     ``allreduce`` adds a float array over all ranks (``lambda a: a`` on one process).
     Each bond and triangle is owned by the rank that owns its lowest-numbered node, so
     the sums over all ranks are the global ones. Collective: every rank computes them
     (unless every rank's model is calibrated already), so that all ranks use the same.
     """
-    if isinstance(model.calibration, calibration.MicroParameters):
-        return model.calibration
     if allreduce(np.array([0.0 if model.is_calibrated else 1.0]))[0] == 0.0:
-        return model.micro
+        return model.micros
+    if not isinstance(model.calibration, str):
+        return model.micros
     geom = _geometry.of(lay.patch)
     own_b = owned_bonds(lay)
+    constants = [m.in_plane for m in model.all_materials]
     if model.calibration == "relaxed":
         spread = _interior_spread(model.mesh, lay, geom, own_b, allreduce)
-        return calibration.relaxed(
-            model.kind, model.mesh, model.E, model.nu, model.bonds, spread=spread
+        return tuple(
+            calibration.relaxed(model.kind, model.mesh, E2, nu2, model.bonds, spread=spread)
+            for E2, nu2 in constants
         )
     w = bond_weights(model.bonds, geom)
     sums = calibration.moment_sums(model.kind, geom, w, own_b, owned_triangles(lay))
     mom = calibration.moments_from_sums(allreduce(sums), model.mesh.area)
-    return calibration.paper_from_moments(model.kind, mom, model.E, model.nu)
+    return tuple(calibration.paper_from_moments(model.kind, mom, E2, nu2) for E2, nu2 in constants)
 
 
 def _interior_spread(mesh: Mesh, lay: Layout, geom, own_b, allreduce) -> float:
@@ -227,9 +232,9 @@ def _interior_spread(mesh: Mesh, lay: Layout, geom, own_b, allreduce) -> float:
     return float(np.sqrt(max(s2 / c - mean**2, 0.0)) / mean)
 
 
-def owned_loads(mesh: Mesh, loads, lay: Layout) -> np.ndarray:
+def owned_loads(mesh: Mesh, loads, lay: Layout, thickness: float = 1.0) -> np.ndarray:
     """External forces on the owned dofs, shape (2 n_owned,)."""
-    return nodal_forces(mesh, loads, nodes=lay.local_nodes[: lay.n_owned])
+    return nodal_forces(mesh, loads, nodes=lay.local_nodes[: lay.n_owned], thickness=thickness)
 
 
 def patch_memory(lay: Layout) -> dict:

@@ -20,7 +20,8 @@ import numpy as np
 
 from ..errors import ConvergenceError, InputError, MissingDependencyError, SolverError
 from ..lattice.operator import scatter_bond_forces
-from ..problem import check_restrained, constraints
+from ..problem import FollowerPressures, check_restrained, constraints
+from ..problem.follower import split_followers
 from ..solvers.newton import State, solve_nonlinear
 from ..solvers.result import LinearSolve, ParallelInfo, Solution, SolveInfo, StabilityCheck, Timings
 from .partition import Layout, layout, micro_parameters, owned_bonds, owned_loads, patch_memory
@@ -248,9 +249,10 @@ class _Setup:
     lay: Layout
     mpi: object  # mpi4py communicator
     g_patch: np.ndarray  # prescribed values on the patch dofs (0 where free)
-    f_own: np.ndarray  # external forces on the owned dofs
+    f_own: np.ndarray  # external (dead) forces on the owned dofs
     n_dof: int
     n_constrained: int
+    follower: FollowerPressures  # follower pressures on the patch (patch numbering)
 
 
 def _prepare(PETSc, comm, model, supports, loads, opts, seconds: dict) -> _Setup:
@@ -264,12 +266,21 @@ def _prepare(PETSc, comm, model, supports, loads, opts, seconds: dict) -> _Setup
     seconds["partition"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     mpi = comm.tompi4py()
-    micro = micro_parameters(model, lay, lambda a: mpi.allreduce(np.asarray(a, dtype=float)))
+    micros = micro_parameters(model, lay, lambda a: mpi.allreduce(np.asarray(a, dtype=float)))
     if not model.is_calibrated:
-        model.set_micro(micro)
+        model.set_micro(micros)
     seconds["calibration"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    pm = type(model)(lay.patch, model.E, model.nu, calibration=micro, bonds=model.bonds)
+    pm = type(model)(
+        lay.patch,
+        model.E,
+        model.nu,
+        calibration=micros if len(micros) > 1 else micros[0],
+        bonds=model.bonds,
+        plane=model.plane,
+        thickness=model.thickness,
+        materials={k: (m.E, m.nu) for k, m in model.materials.items()},
+    )
     cnew = 2 * lay.new_of[dofs // 2] + dofs % 2
     order = np.argsort(cnew)
     cdofs, cvals = cnew[order], values[order]
@@ -279,6 +290,11 @@ def _prepare(PETSc, comm, model, supports, loads, opts, seconds: dict) -> _Setup
     g_patch = np.where(is_c, cvals[pos] if len(cdofs) else 0.0, 0.0)
     kind = "nonlinear" if opts.nonlinear else "linear"
     system = _System(PETSc, comm, lay, cdofs, kind)
+    # follower pressures follow the deformed boundary in Newton; dead loads otherwise
+    dead, follow = split_followers(loads) if opts.nonlinear else (loads, [])
+    local_of = np.full(mesh.n_points, -1, dtype=np.int64)
+    local_of[lay.local_nodes] = np.arange(len(lay.local_nodes))
+    follower = FollowerPressures.from_loads(mesh, follow, model.t).restricted(local_of)
     setup = _Setup(
         pm,
         system,
@@ -286,9 +302,10 @@ def _prepare(PETSc, comm, model, supports, loads, opts, seconds: dict) -> _Setup
         lay,
         mpi,
         g_patch,
-        owned_loads(mesh, loads, lay),
+        owned_loads(mesh, dead, lay, model.t),
         int(2 * mesh.n_points),
         int(len(dofs)),
+        follower,
     )
     seconds["patch"] = time.perf_counter() - t0
     return setup
@@ -410,6 +427,15 @@ class PatchProblem:
 
         return float(self.s.mpi.allreduce(float(np.max(np.abs(v))) if v.size else 0.0, MPI.MAX))
 
+    def load_norm(self) -> float:
+        return self.norm(self.f_ext + self._follow(self.s.lay.patch.points, 1.0))
+
+    def _follow(self, x_patch: np.ndarray, lam: float) -> np.ndarray:
+        """Follower forces on the owned dofs at current patch positions."""
+        if not self.s.follower or lam == 0.0:
+            return np.zeros(self.n2)
+        return lam * self.s.follower.forces(x_patch)[: self.n2]
+
     def evaluate(self, u: np.ndarray, lam: float) -> State | None:
         from mpi4py import MPI
 
@@ -424,17 +450,23 @@ class PatchProblem:
         if self.s.mpi.allreduce(bool(bad), MPI.LOR):
             return None
         fi = scatter_bond_forces(op.mesh.topology.bonds, (t / length)[:, None] * d, len(up))
-        r = fi[: self.n2] - lam * self.f_ext
+        r = fi[: self.n2] - lam * self.f_ext - self._follow(self.s.lay.patch.points + up, lam)
         if self.s.mpi.allreduce(not bool(np.all(np.isfinite(r))), MPI.LOR):
             return None
         r_free = r.copy()
         r_free[self.constrained] = 0.0
-        return State(r_free, r, (up, t))
+        return State(r_free, r, (up, t, lam))
 
     def factor(self, u: np.ndarray, state: State) -> None:
+        import scipy.sparse as sp
+
         t0 = time.perf_counter()
-        up, t = state.aux
-        self.s.system.set(self.s.pm.operator.assemble(up, None, t))
+        up, t, lam = state.aux
+        kt = self.s.pm.operator.assemble(up, None, t)
+        if self.s.follower and lam != 0.0:
+            ft = self.s.follower.tangent(len(up))
+            kt = sp.bsr_matrix(kt.tocsr() - lam * ft, blocksize=(2, 2))
+        self.s.system.set(kt)
         self.assembly_seconds += time.perf_counter() - t0
         self._builds += 1
         self._fresh = True
@@ -473,7 +505,7 @@ def _nonlinear(s: _Setup, opts, seconds: dict):
     seconds["assembly"] = problem.assembly_seconds
     seconds["setup"] = float(sum(k.setup_seconds for k in problem.log))
     seconds["solve"] = float(sum(k.solve_seconds for k in problem.log))
-    state = problem.evaluate(x, 1.0)
+    state = problem.evaluate(x, 1.0)  # reactions of the dead and follower loads
     record = dict(
         iterations=rep.iterations,
         residuals=tuple(r for st in rep.steps for r in st.residuals),

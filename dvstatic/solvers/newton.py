@@ -28,6 +28,7 @@ from ..errors import ConvergenceError, InputError, SolverError, UnstableError
 from ..lattice import VoronoiModel
 from ..lattice.operator import scatter_bond_forces
 from ..linalg import ConstrainedSystem
+from ..problem import FollowerPressures
 from .options import SolveOptions
 from .result import NewtonStep, SolveInfo
 from .tangent import TangentSolver
@@ -71,6 +72,9 @@ class NewtonProblem(Protocol):
 
     def max_abs(self, v: np.ndarray) -> float: ...
 
+    def load_norm(self) -> float:
+        """Norm of the full load (dead and follower loads in the reference state)."""
+
     def evaluate(self, u: np.ndarray, lam: float) -> State | None:
         """Residual ``f_int(u) - lam f_ext``; None if the state is invalid (inverted)."""
 
@@ -89,9 +93,21 @@ class NewtonProblem(Protocol):
 
 
 class SerialProblem:
-    """A model with its supports and loads, on one process (:class:`NewtonProblem`)."""
+    """A model with its supports and loads, on one process (:class:`NewtonProblem`).
 
-    def __init__(self, model: VoronoiModel, dofs, values, f_ext, tangent: TangentSolver):
+    ``f_ext`` are the dead loads; ``follower`` the follower pressures, whose forces
+    follow the deformed boundary (and enter the tangent).
+    """
+
+    def __init__(
+        self,
+        model: VoronoiModel,
+        dofs,
+        values,
+        f_ext,
+        tangent: TangentSolver,
+        follower: FollowerPressures | None = None,
+    ):
         self.op = model.operator
         self.mesh = model.mesh
         n = 2 * self.mesh.n_points
@@ -101,7 +117,8 @@ class SerialProblem:
         self.targets = np.zeros(n)
         self.targets[self.dofs] = values
         self.f_ext = np.asarray(f_ext, dtype=float)
-        force_unit = model.k_n * float(np.mean(model.geometry.length))
+        self.follower = follower if follower else None
+        force_unit = model.k_n * model.t * float(np.mean(model.geometry.length))
         self.atol = 1e-10 * force_unit * np.sqrt(n)
         self.tangent = tangent
         self.system: ConstrainedSystem | None = None
@@ -111,6 +128,12 @@ class SerialProblem:
 
     def max_abs(self, v: np.ndarray) -> float:
         return float(np.max(np.abs(v))) if v.size else 0.0
+
+    def load_norm(self) -> float:
+        f = self.f_ext
+        if self.follower is not None:
+            f = f + self.follower.forces(self.mesh.points)
+        return self.norm(f)
 
     def evaluate(self, u: np.ndarray, lam: float) -> State | None:
         uu = u.reshape(-1, 2)
@@ -124,15 +147,28 @@ class SerialProblem:
             self.mesh.topology.bonds, (t / length)[:, None] * d, self.mesh.n_points
         )
         r -= lam * self.f_ext
+        if self.follower is not None:
+            r -= lam * self.follower.forces(self.mesh.points + uu)
         if not np.all(np.isfinite(r)):
             return None
         r_free = r.copy()
         r_free[self.constrained] = 0.0
-        return State(r_free, r, t)
+        return State(r_free, r, (t, lam))
+
+    def jacobian(self, u: np.ndarray, state: State):
+        """The exact derivative of the residual at ``u`` (BSR, not constrained): the
+        lattice tangent minus the follower pressures' derivative."""
+        import scipy.sparse as sp
+
+        tension, lam = state.aux
+        kt = self.op.assemble(u.reshape(-1, 2), None, tension)
+        if self.follower is not None and lam != 0.0:
+            ft = self.follower.tangent(self.mesh.n_points)
+            kt = sp.bsr_matrix(kt.tocsr() - lam * ft, blocksize=(2, 2))
+        return kt
 
     def factor(self, u: np.ndarray, state: State) -> None:
-        kt = self.op.assemble(u.reshape(-1, 2), None, state.aux)
-        self.system = ConstrainedSystem(kt, self.dofs)
+        self.system = ConstrainedSystem(self.jacobian(u, state), self.dofs)
         self.tangent.factor(self.system)
 
     def solve(self, rhs_free: np.ndarray, du_c: np.ndarray) -> tuple[np.ndarray, int]:
@@ -182,7 +218,7 @@ def solve_nonlinear(
     """
     u = np.zeros_like(problem.f_ext)
     lam, dlam = 0.0, 1.0 / opts.steps
-    f_scale = problem.norm(problem.f_ext)
+    f_scale = problem.load_norm()
     accepted: list[NewtonStep] = []
     cutbacks = step_no = 0
     bar = _progress_bar(opts.progress)

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..lattice import VoronoiModel
-from ..lattice.stress import node_stress, strain_stress
+from ..lattice.stress import node_stress, out_of_plane_stress, strain_stress
 
 __all__ = [
     "Solution",
@@ -305,6 +305,12 @@ class Solution:
             f"unknown stress method {method!r}; accepted: {', '.join(STRESS_METHODS)}", "method"
         )
 
+    def out_of_plane_stress(self, method: str = "virial") -> np.ndarray:
+        """``szz`` per node, shape (N,): ``nu (sxx + syy)`` in plane strain (of the
+        in-plane stress of ``method``), zero in plane stress."""
+        return out_of_plane_stress(self.model, self.stress(method))
+
     def energy(self) -> float:
-        """Strain energy ``u.K.u / 2`` of the linear model (energy per unit thickness)."""
+        """Strain energy ``u.K.u / 2`` of the linear model (energy per unit thickness, or
+        the total with a ``thickness``)."""
         return self.model.energy(self.u)

@@ -13,7 +13,8 @@ from ..errors import ConvergenceError, InputError
 from ..lattice import VoronoiModel
 from ..lattice import geometry as _geometry
 from ..lattice.stress import check_model
-from ..problem import as_list, check_restrained, constraints, load_vector
+from ..problem import FollowerPressures, as_list, check_restrained, constraints, load_vector
+from ..problem.follower import split_followers
 from . import backends
 from .linear import solve_linear
 from .newton import SerialProblem, solve_nonlinear
@@ -54,7 +55,7 @@ class _Problem:
         mesh = model.mesh
         self.dofs, self.values = constraints(mesh, supports)
         check_restrained(mesh.points, self.dofs)
-        self.f = load_vector(mesh, loads)
+        self.f = load_vector(mesh, loads, thickness=model.t)
         self.reused: list[str] = []
         t0 = time.perf_counter()
         if _geometry.is_cached(mesh):
@@ -94,9 +95,15 @@ def _solve_serial(model: VoronoiModel, supports: list, loads: list, opts) -> Sol
         nonlinear=opts.nonlinear,
     )
     if kind == "dynamic-relaxation":
+        if opts.nonlinear and split_followers(loads)[1]:
+            raise InputError(
+                "follower pressures need an implicit solver (direct, amg or petsc), not "
+                "dynamic relaxation",
+                "solver",
+            )
         x, r_full, info = _relax(model, p, opts, common)
     elif opts.nonlinear:
-        x, r_full, info = _newton(model, p, opts, kind, common)
+        x, r_full, info = _newton(model, p, opts, kind, common, loads)
     else:
         x, r_full, info = _linear(model, p, opts, kind, common, supports)
     log.info(
@@ -130,11 +137,17 @@ def _relax(model: VoronoiModel, p: _Problem, opts, common: dict):
     return x, r_full, info
 
 
-def _newton(model: VoronoiModel, p: _Problem, opts, kind: str, common: dict):
+def _newton(model: VoronoiModel, p: _Problem, opts, kind: str, common: dict, loads: list):
     t0 = time.perf_counter()
-    problem = SerialProblem(model, p.dofs, p.values, p.f, tangent_solver(kind, model.mesh))
+    dead, follow = split_followers(loads)
+    f_dead = load_vector(model.mesh, dead, thickness=model.t) if follow else p.f
+    follower = FollowerPressures.from_loads(model.mesh, follow, model.t)
+    tangent = tangent_solver(kind, model.mesh)
+    problem = SerialProblem(model, p.dofs, p.values, f_dead, tangent, follower)
     x, rep = solve_nonlinear(problem, opts, kind)
-    r_full = _internal(model, x, p.K, True) - p.f
+    r_full = _internal(model, x, p.K, True) - f_dead
+    if follower:
+        r_full -= follower.forces(model.mesh.points + x.reshape(-1, 2))
     info = SolveInfo(
         kind,
         iterations=rep.iterations,
@@ -177,7 +190,7 @@ def _unconverged(model, supports: list, loads: list, exc: ConvergenceError, opts
     """The last state of a failed iteration, marked unconverged (best effort)."""
     mesh = model.mesh
     dofs, _ = constraints(mesh, supports)
-    f_full = load_vector(mesh, loads)
+    f_full = load_vector(mesh, loads, thickness=model.t)
     x = np.asarray(exc.state, dtype=float).reshape(-1)
     r_full = _internal(model, x, model.stiffness("bsr"), opts.nonlinear) - exc.load_factor * f_full
     reactions = np.zeros_like(x)

@@ -1,0 +1,90 @@
+"""Selections of nodes and boundary edges by part name or index array."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from ..errors import InputError
+from ..mesh import Mesh
+
+__all__ = ["as_list", "select_nodes", "select_edges", "where_ok", "label"]
+
+
+def where_ok(where, name: str) -> None:
+    if isinstance(where, str):
+        return
+    if isinstance(where, (np.ndarray, Sequence)) and not isinstance(where, (bytes, bytearray)):
+        return
+    raise TypeError(
+        f"{name}: `where` must be a boundary part name or an index array, "
+        f"got {type(where).__name__}"
+    )
+
+
+def as_list(items, cls_names: str) -> list:
+    """Accept a single object, None or a sequence of objects (their types are checked
+    where they are used)."""
+    if items is None:
+        return []
+    if isinstance(items, (list, tuple)):
+        return list(items)
+    if isinstance(items, (str, bytes, np.ndarray, int, float, dict)):
+        raise TypeError(f"expected {cls_names} or a list of them, got {type(items).__name__}")
+    return [items]
+
+
+def select_nodes(mesh: Mesh, where, what: str) -> np.ndarray:
+    """Node indices (sorted, unique) from a part name or an index array."""
+    if isinstance(where, str):
+        return mesh.part_nodes(where)
+    arr = np.asarray(where)
+    if arr.size == 0:
+        raise InputError(f"{what}: the node selection is empty", "where")
+    if not np.issubdtype(arr.dtype, np.integer):
+        raise TypeError(f"{what}: node indices must be integers, got dtype {arr.dtype}")
+    if arr.ndim != 1:
+        raise InputError(
+            f"{what}: node indices must be a 1-D array, got shape {arr.shape}", "where"
+        )
+    if arr.min() < 0 or arr.max() >= mesh.n_points:
+        raise InputError(
+            f"{what}: node indices must lie in [0, {mesh.n_points}), "
+            f"got [{arr.min()}, {arr.max()}]",
+            "where",
+        )
+    return np.unique(arr.astype(np.int64))
+
+
+def select_edges(mesh: Mesh, where, what: str) -> np.ndarray:
+    """Boundary edges (m, 2) from a part name or an edge array, oriented
+    counter-clockwise around the body (the body lies to the left of a -> b)."""
+    if isinstance(where, str):
+        return mesh.part_edges(where)
+    arr = np.asarray(where)
+    if arr.ndim != 2 or arr.shape[1] != 2:
+        raise InputError(f"{what}: edges must have shape (m, 2), got {arr.shape}", "where")
+    if not np.issubdtype(arr.dtype, np.integer):
+        raise TypeError(f"{what}: edge indices must be integers, got dtype {arr.dtype}")
+    n = mesh.n_points
+    be = mesh.boundary_edges
+    arr = arr.astype(np.int64)
+    fwd = be @ np.array([n, 1])
+    key = arr @ np.array([n, 1])
+    back = arr[:, ::-1] @ np.array([n, 1])
+    ok_fwd, ok_back = np.isin(key, fwd), np.isin(back, fwd)
+    if not np.all(ok_fwd | ok_back):
+        bad = arr[~(ok_fwd | ok_back)][0]
+        raise InputError(f"{what}: {bad.tolist()} is not a boundary edge of the mesh", "where")
+    return np.where(ok_fwd[:, None], arr, arr[:, ::-1])
+
+
+#: two-point Gauss rule on [0, 1]: abscissae and weights
+_GAUSS_S = 0.5 + np.array([-0.5, 0.5]) / np.sqrt(3.0)
+_GAUSS_W = np.array([0.5, 0.5])
+
+
+def label(where) -> str:
+    """A short description of a selection for messages."""
+    return repr(where) if isinstance(where, str) else f"{len(np.asarray(where))} edges"
