@@ -103,7 +103,16 @@ def _run(args: argparse.Namespace) -> int:
     if o["fe_compare"]:
         mat = sc.data["material"]
         fe = fem.solve(
-            mesh, mat["E"], mat["nu"], supports, loads, order=o["fe_order"], refine=o["fe_refine"]
+            mesh,
+            mat["E"],
+            mat["nu"],
+            supports,
+            loads,
+            order=o["fe_order"],
+            refine=o["fe_refine"],
+            plane=mat["plane"],
+            thickness=mat["thickness"],
+            materials={m["region"]: (m["E"], m["nu"]) for m in sc.data["materials"]} or None,
         )
     for i, name in enumerate(o["part_stress"]):
         if name not in mesh.parts:
@@ -194,16 +203,26 @@ def _swap_in(stage: Path, out_dir: Path) -> None:
         shutil.rmtree(old, ignore_errors=True)
 
 
+def _model_line(md: dict) -> str:
+    """One line on the model: material, plane, thickness, calibration and its cost."""
+    txt = f"{md['type']} E = {md['E']:g}, nu = {md['nu']:g}, plane {md['plane']}"
+    if md.get("thickness") is not None:
+        txt += f", thickness {md['thickness']:g}"
+    txt += f": k_n = {md['k_n']:.6g}, nu_m = {md['nu_m']:.6g} ({md['calibration']}"
+    if md["calibration"] == "relaxed":
+        txt += f" from the {md['calibration_source']}, {md['calibration_seconds']:.2f} s"
+    txt += f"; bonds {md['bonds']})"
+    for name, m in md.get("materials", {}).items():
+        txt += f"; {name}: E = {m['E']:g}, nu = {m['nu']:g}"
+    return txt
+
+
 def _print_summary(sc, d: dict, written: list[Path]) -> None:
     m, md, s = d["mesh"], d["model"], d["solver"]
     rows = [
         ("scene", f"{sc.path}" + (f"  ({sc.data['title']})" if sc.data["title"] else "")),
         ("mesh", f"{m['nodes']} nodes, {m['bonds']} bonds, sigma_L = {m['sigma_L']:.4f}"),
-        (
-            "model",
-            f"{md['type']} E = {md['E']:g}, nu = {md['nu']:g}: k_n = {md['k_n']:.6g}, "
-            f"nu_m = {md['nu_m']:.6g}",
-        ),
+        ("model", _model_line(md)),
         (
             "solver",
             f"{s['solver']}{' (nonlinear)' if s.get('nonlinear') else ''}, "
@@ -299,7 +318,7 @@ def _run_scripts(names: list[Path], extra: list[str], args) -> int:
 
 def _validate(args: argparse.Namespace) -> int:
     d = _scripts_dir(args.dir)
-    scripts = sorted(d.glob("fig[0-9][0-9]_*.py")) + [d / "elastica.py"]
+    scripts = sorted(d.glob("fig[0-9][0-9]_*.py")) + [d / "elastica.py", d / "convergence.py"]
     if args.only:
         want = [w.strip() for w in args.only.split(",") if w.strip()]
         known = {p.stem.split("_")[0]: p for p in scripts}

@@ -37,7 +37,7 @@ __all__ = [
 ]
 
 #: nodal fields for pictures
-FIELDS = ("|u|", "ux", "uy", "sxx", "syy", "sxy", "von_mises")
+FIELDS = ("|u|", "ux", "uy", "sxx", "syy", "sxy", "szz", "von_mises")
 
 
 def atomic_path(path: Path) -> Path:
@@ -90,10 +90,13 @@ def read_mesh(path: str | Path) -> Mesh:
     remap[used] = np.arange(len(used))
     parts: dict[str, list[np.ndarray]] = {}
     phys = m.cell_data.get("gmsh:physical")
-    names = {}
+    names: dict[int, str] = {}
+    surfaces: dict[int, str] = {}
     for name, (tag, dim) in ((k, v[:2]) for k, v in m.field_data.items()):
         if int(dim) == 1:
             names[int(tag)] = name
+        elif int(dim) == 2:
+            surfaces[int(tag)] = name
     if phys is not None:
         for block, tags in zip(m.cells, phys, strict=True):
             if block.type not in ("line", "line3"):
@@ -107,9 +110,28 @@ def read_mesh(path: str | Path) -> Mesh:
                     )
                 parts.setdefault(names.get(int(tag), f"group{int(tag)}"), []).append(remap[sel])
     parts_arr = {k: np.vstack(v) for k, v in parts.items()}
-    mesh = Mesh(pts[used], remap[tri], parts=parts_arr)
+    regions = _surface_regions(m, phys, surfaces)
+    mesh = Mesh(pts[used], remap[tri], parts=parts_arr, regions=regions)
     log.info("read %s: %r", path, mesh)
     return mesh
+
+
+def _surface_regions(m, phys, surfaces: dict[int, str]) -> dict[str, np.ndarray]:
+    """Triangle indices (in the order the triangle blocks are stacked) of every physical
+    surface group."""
+    if phys is None:
+        return {}
+    out: dict[str, list[np.ndarray]] = {}
+    offset = 0
+    for block, tags in zip(m.cells, phys, strict=True):
+        if block.type not in ("triangle", "triangle6"):
+            continue
+        tags = np.asarray(tags)
+        for tag in np.unique(tags):
+            name = surfaces.get(int(tag), f"surface{int(tag)}")
+            out.setdefault(name, []).append(offset + np.flatnonzero(tags == tag))
+        offset += len(block.data)
+    return {k: np.concatenate(v) for k, v in out.items()}
 
 
 def nodal_field(solution, name: str, stress: str = "virial") -> np.ndarray:
@@ -124,16 +146,15 @@ def nodal_field(solution, name: str, stress: str = "virial") -> np.ndarray:
         return u[:, 0]
     if name == "uy":
         return u[:, 1]
-    if name in ("sxx", "syy", "sxy", "von_mises"):
+    if name in ("sxx", "syy", "sxy", "szz", "von_mises"):
         s = solution.stress(stress)
         sxx, syy, sxy = s[:, 0, 0], s[:, 1, 1], 0.5 * (s[:, 0, 1] + s[:, 1, 0])
-        if name == "sxx":
-            return sxx
-        if name == "syy":
-            return syy
-        if name == "sxy":
-            return sxy
-        return np.sqrt(sxx**2 - sxx * syy + syy**2 + 3 * sxy**2)
+        szz = solution.out_of_plane_stress(stress)
+        fields = {"sxx": sxx, "syy": syy, "sxy": sxy, "szz": szz}
+        if name in fields:
+            return fields[name]
+        # von Mises of the 3-D state (szz = 0 in plane stress)
+        return np.sqrt(0.5 * ((sxx - syy) ** 2 + (syy - szz) ** 2 + (szz - sxx) ** 2) + 3 * sxy**2)
     raise InputError(f"unknown field {name!r}; accepted: {', '.join(FIELDS)}", "field")
 
 
@@ -231,14 +252,30 @@ def _mesh_summary(mesh: Mesh) -> dict:
 
 
 def _model_summary(model) -> dict:
-    return {
+    details = model.micro.details or {}
+    out = {
         "type": model.kind,
         "E": model.E,
         "nu": model.nu,
+        "plane": model.plane,
+        "thickness": model.thickness,
         "calibration": model.micro.calibration,
+        "calibration_source": details.get("source", model.micro.calibration),
+        "calibration_seconds": sum(
+            float((m.details or {}).get("seconds", 0.0)) for m in model.micros
+        ),
+        "bonds": model.bonds,
         "k_n": model.k_n,
         "nu_m": model.nu_m,
+        "stabilised": model.micro.stabilised,
+        "clipped_fraction": model.clipped_fraction,
     }
+    if model.materials:
+        out["materials"] = {
+            name: {"E": m.E, "nu": m.nu, "k_n": micro.k_n, "nu_m": micro.nu_m}
+            for (name, m), micro in zip(model.materials.items(), model.micros[1:], strict=True)
+        }
+    return out
 
 
 def _solver_summary(info) -> dict:

@@ -20,8 +20,10 @@ CASES = [
     # prescribed displacements (eliminated with non-zero values, Newton jumps)
     ("stretch", "RV", False),
     ("stretch", "RV", True),
-    # the relaxed calibration's bond-length spread summed across ranks
-    ("uniaxial", "RV-relaxed", False),
+    # the paper's model: its calibration sums over owned bonds and triangles
+    ("uniaxial", "DV-paper", False),
+    # a mesh without recipe: the relaxed calibration's bond-length spread summed
+    ("uniaxial", "RV-spread", False),
     # pressure on a bore lined by a second material (and, nonlinear, following it)
     ("lined-bore", "RV", False),
     ("lined-bore", "DV", True),
@@ -30,9 +32,10 @@ CASES = [
 
 def setup(problem: str, model: str, nonlinear: bool):
     """Mesh, model, supports and loads of one case (the same in the test process)."""
-    cls = dv.DV if model == "DV" else dv.RV
-    nu = 0.35 if model == "DV" else 0.2
-    calibration = "relaxed" if model.endswith("relaxed") else "paper"
+    cls = dv.DV if model.startswith("DV") else dv.RV
+    nu = 0.35 if model.startswith("DV") else 0.2
+    # the defaults (relaxed, stabilised, surface bonds) unless the paper's model is asked
+    kw = {"calibration": "paper", "bonds": "uniform"} if model.endswith("paper") else {}
     if problem == "lined-bore":
         lining = dv.domain.Circle((0.0, 0.0), 0.55, name="lining")
         bore = dv.domain.Circle((0.0, 0.0), 0.4, "bore")
@@ -42,7 +45,7 @@ def setup(problem: str, model: str, nonlinear: bool):
         sup = [dv.Fix(near[:2], y=0.0), dv.Fix(near[2:], x=0.0)]
         ld = [dv.Pressure("bore", 2e3 if nonlinear else 1.0, follower=nonlinear)]
         materials = {"lining": (3e5, 0.25)}
-        return cls(mesh, 1e5, nu, calibration=calibration, materials=materials), sup, ld
+        return cls(mesh, 1e5, nu, materials=materials, **kw), sup, ld
     if problem == "stretch":
         mesh = dv.mesh.rectangle(1.0, 1.0, 0.05, kind="jittered", seed=5)
         sup = [dv.Fix("left", x=0.0), dv.Fix("bottom", y=0.0), dv.Fix("right", x=0.03)]
@@ -55,7 +58,9 @@ def setup(problem: str, model: str, nonlinear: bool):
         mesh = dv.mesh.rectangle(4.0, 1.0, 0.1, kind="jittered", seed=2)
         sup = [dv.Fix("left"), dv.Fix("right", x=0.0, y=0.0)]
         ld = [dv.BodyForce((0.0, -300.0 if nonlinear else -1.0))]
-    return cls(mesh, 1e5, nu, calibration=calibration), sup, ld
+    if model.endswith("spread"):  # as if read from a file: no generator recipe
+        mesh = dv.Mesh(mesh.points, mesh.triangles, parts=dict(mesh.parts))
+    return cls(mesh, 1e5, nu, **kw), sup, ld
 
 
 OPTIONS = dict(rtol=1e-12, newton_rtol=1e-10, steps=4)

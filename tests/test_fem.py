@@ -64,8 +64,10 @@ def test_lattice_beam_against_fe(beam_ref, cls):
         sol = dv.solve(cls(m, E_BEAM, NU), sup, ld)
         w = interpolate(m, sol.u, [[2.0, 0.5]])[0, 1]
         errs.append(abs(w / w_ref - 1))
-    assert errs[1] < 0.03
-    assert errs[1] < errs[0]
+    # within 1 % of FE; not monotone at these two levels: the lattice is P1 with an
+    # exact tensor inside, and its zigzag clamped ends (half triangles) are a band of
+    # other cells whose effect changes with the column count (docs/theory.md 8.7)
+    assert max(errs) < 0.01
 
 
 def test_fe_point_loads_and_node_supports():
@@ -89,3 +91,35 @@ def test_compare():
     np.testing.assert_array_equal(c.diff, a - b)
     with pytest.raises(ValueError, match="same nodes"):
         dv.compare(a, b[:1])
+
+
+def test_fe_on_a_mesh_beyond_46341_nodes():
+    """Edge keys (i * n + j) must not overflow int32 (scikit-fem's facets are int32):
+    a regression of the load on the right side losing half its facets at 63k nodes."""
+    mesh = dv.mesh.rectangle(1.0, 1.0, 0.0048, kind="lattice")
+    assert mesh.n_points > 46341
+    E, nu = 1e5, 0.2
+    fe = dv.fem.solve(
+        mesh,
+        E,
+        nu,
+        [dv.Fix("left", x=0.0), dv.Fix("bottom", y=0.0)],
+        [dv.Traction("right", (-1.0, 0.0))],
+    )
+    assert fe.info["load_resultant"][0] == pytest.approx(-1.0, rel=1e-12)
+    exact = np.c_[-mesh.points[:, 0] / E, nu * mesh.points[:, 1] / E]
+    assert np.abs(fe.u - exact).max() < 1e-9 * np.abs(exact).max()
+
+
+def test_p2_with_curved_geometry_matches_a_clamped_lame_ring():
+    """Quadratic geometry on two circles (the inverse map of scikit-fem run in chunks):
+    the hoop stress at the bore of a ring clamped outside, under internal pressure."""
+    E, nu, a, b, p = 1e3, 0.3, 0.5, 1.0, 1.0
+    mesh = dv.mesh.disc(b, 0.02, kind="lattice", holes=[dv.domain.Circle((0, 0), a, "bore")])
+    fe = dv.fem.solve(mesh, E, nu, [dv.Fix("boundary")], [dv.Pressure("bore", p)], order=2)
+    # u_r = C1 (r - b^2 / r): sigma_rr(a) = -p
+    c1 = -p * (1 - nu**2) / (E * ((1 + nu) + (1 - nu) * b**2 / a**2))
+    hoop = E / (1 - nu**2) * c1 * ((1 + nu) - (1 - nu) * b**2 / a**2)
+    s = fe.stress(np.array([[0.0, a], [a, 0.0]]))
+    assert s[0, 0, 0] == pytest.approx(hoop, rel=2e-3)
+    assert s[1, 1, 1] == pytest.approx(hoop, rel=2e-3)

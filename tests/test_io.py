@@ -68,6 +68,60 @@ def test_gmsh_mesh_loads_and_solves(tmp_path):
     assert sol.reactions.sum(axis=0)[0] == pytest.approx(-1.0, rel=1e-9)
 
 
+def test_gmsh_physical_surfaces_become_regions_with_their_materials(tmp_path):
+    """A bar of two layers (lower soft, upper stiff) pulled along its length: the gmsh
+    surfaces are regions, each with its material; the stretch is that of the layers in
+    parallel."""
+    base = dv.mesh.rectangle(2.0, 0.5, 0.1, kind="lattice")
+    left, right = base.part_edges("left"), base.part_edges("right")
+    rows = np.unique(base.points[:, 1])
+    split = rows[len(rows) // 2]  # a row of the lattice: the layers' interface
+    stiff = base.triangle_coordinates()[:, :, 1].mean(axis=1) > split
+    order = np.r_[np.flatnonzero(~stiff), np.flatnonzero(stiff)]
+    m = meshio.Mesh(
+        np.c_[base.points, np.zeros(base.n_points)],
+        [
+            ("triangle", base.triangles[order[: (~stiff).sum()]]),
+            ("triangle", base.triangles[order[(~stiff).sum() :]]),
+            ("line", np.vstack([left, right])),
+        ],
+        cell_data={
+            "gmsh:physical": [
+                np.full((~stiff).sum(), 3),
+                np.full(stiff.sum(), 4),
+                np.r_[np.full(len(left), 1), np.full(len(right), 2)],
+            ],
+            "gmsh:geometrical": [
+                np.full((~stiff).sum(), 1),
+                np.full(stiff.sum(), 2),
+                np.r_[np.full(len(left), 1), np.full(len(right), 2)],
+            ],
+        },
+        field_data={
+            "clamp": np.array([1, 1]),
+            "pull": np.array([2, 1]),
+            "soft": np.array([3, 2]),
+            "stiff": np.array([4, 2]),
+        },
+    )
+    path = tmp_path / "bar.msh"
+    meshio.write(path, m, file_format="gmsh22", binary=False)
+    mesh = io.read_mesh(path)
+    assert set(mesh.regions) == {"soft", "stiff"}
+    cy = mesh.triangle_coordinates()[:, :, 1].mean(axis=1)
+    assert np.all(cy[mesh.regions["stiff"]] > split) and np.all(cy[mesh.regions["soft"]] < split)
+    # both ends moved apart by 2 eps (nu = 0): equal strain in both layers, so each
+    # layer carries its own E eps and the lattice's reaction is their sum
+    eps = 1e-3
+    pin = [int(np.argmin(np.hypot(*mesh.points.T)))]
+    sup = [dv.Fix("clamp", x=0.0), dv.Fix(pin, y=0.0), dv.Fix("pull", x=2 * eps)]
+    force = eps * (1e3 * split + 4e3 * (0.5 - split))
+    fe = dv.fem.solve(mesh, 1e3, 0.0, sup, [], materials={"stiff": (4e3, 0.0)})
+    np.testing.assert_allclose(fe.u[:, 0], eps * mesh.points[:, 0], atol=1e-12)
+    sol = dv.solve(dv.RV(mesh, 1e3, 0.0, materials={"stiff": (4e3, 0.0)}), sup)
+    assert sol.reactions[mesh.part_nodes("pull"), 0].sum() == pytest.approx(force, rel=0.03)
+
+
 def test_read_mesh_errors(tmp_path):
     with pytest.raises(ValueError, match="mesh file not found"):
         io.read_mesh(tmp_path / "none.msh")

@@ -62,7 +62,9 @@ def test_best_effort_never_hides_a_refusal():
     m = dv.mesh.rectangle(1.0, 1.0, 0.1, kind="random", seed=0)
     sup, ld = uniaxial_problem()
     with pytest.raises(dv.SolverError, match="not positive definite"):
-        dv.solve(dv.DV(m, E_BEAM, 0.2), sup, ld, best_effort=True)
+        dv.solve(
+            dv.DV(m, E_BEAM, 0.2, calibration="paper", bonds="uniform"), sup, ld, best_effort=True
+        )
 
 
 def test_cli_best_effort_exits_nonzero(tmp_path, capsys):

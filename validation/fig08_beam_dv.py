@@ -13,7 +13,7 @@ from __future__ import annotations
 import sys
 
 import numpy as np
-from _common import BEAM_H, BEAM_L, E_BEAM, NU_BEAM, beam_problem, parser, write_json
+from _common import BEAM_H, BEAM_L, E_BEAM, NU_BEAM, PAPER, beam_problem, parser, write_json
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -27,7 +27,7 @@ def main(argv: list[str] | None = None) -> int:
     h = 0.1 if a.quick else a.h
     mesh = dv.mesh.rectangle(BEAM_L, BEAM_H, h, kind="lattice")
     sup, ld = beam_problem()
-    sol = dv.solve(dv.DV(mesh, E_BEAM, NU_BEAM), sup, ld)
+    sol = dv.solve(dv.DV(mesh, E_BEAM, NU_BEAM, **PAPER), sup, ld)
     umag = np.hypot(sol.u[:, 0], sol.u[:, 1])
     scale = 0.1 * BEAM_H / umag.max()
     fig, axes = plot.figure(1, 1, (10, 3.6))

@@ -22,6 +22,7 @@ from _common import (
     BEAM_L,
     E_BEAM,
     NU_BEAM,
+    PAPER,
     beam_problem,
     beam_reference,
     parser,
@@ -55,7 +56,7 @@ def main(argv: list[str] | None = None) -> int:
     fe_mid = ref.evaluate([[BEAM_L / 2, BEAM_H / 2]])[0]
     data["midspan"]["FE"] = fe_mid[1]
     sols = {
-        kind: dv.solve(cls(mesh, E_BEAM, NU_BEAM), sup, ld)
+        kind: dv.solve(cls(mesh, E_BEAM, NU_BEAM, **PAPER), sup, ld)
         for kind, cls in (("DV", dv.DV), ("RV", dv.RV))
     }
     fig, axes = plot.figure(2, 2, (11, 7))

@@ -144,6 +144,39 @@ def _points(points) -> np.ndarray:
     return p
 
 
+def _cells(fe: FEMesh, x: np.ndarray) -> np.ndarray:
+    """The element of every point (2, n); points on the boundary (where round-off can
+    put them just outside) are moved a hair towards the nearest element's centroid."""
+    finder = fe.linear.element_finder()
+    try:
+        return finder(*x)
+    except ValueError:
+        pass
+    from scipy.spatial import cKDTree
+
+    m = fe.linear
+    centroids = m.p[:, m.t].mean(axis=1).T
+    _, near = cKDTree(centroids).query(x.T)
+    nudged = x + 1e-9 * (centroids[near].T - x)
+    try:
+        return finder(*nudged)
+    except ValueError:
+        raise InputError("a point lies outside the mesh", "points") from None
+
+
+def _reference_points(basis, x: np.ndarray, cells: np.ndarray) -> np.ndarray:
+    """Reference coordinates of points ``x`` (2, n) in their ``cells``, in chunks (see
+    :data:`FACET_CHUNK`), shape (2, n, 1)."""
+    chunks = range(0, x.shape[1], FACET_CHUNK) if x.shape[1] else [0]
+    return np.concatenate(
+        [
+            basis.mapping.invF(x[:, i : i + FACET_CHUNK, None], tind=cells[i : i + FACET_CHUNK])
+            for i in chunks
+        ],
+        axis=1,
+    )
+
+
 def _probes(basis, fe: FEMesh, p: np.ndarray):
     """The matrix that evaluates a field of ``basis`` at points ``p`` (n, 2) (scikit-fem's
     ``probes``, with the cells found on the straight-sided mesh so that quadratic
@@ -151,8 +184,8 @@ def _probes(basis, fe: FEMesh, p: np.ndarray):
     from scipy.sparse import coo_matrix
 
     x = np.ascontiguousarray(p.T)
-    cells = fe.linear.element_finder()(*x)
-    pts = basis.mapping.invF(x[:, :, np.newaxis], tind=cells)
+    cells = _cells(fe, x)
+    pts = _reference_points(basis, x, cells)
     phis = np.array(
         [basis.elem.gbasis(basis.mapping, pts, k, tind=cells)[0] for k in range(basis.Nbfun)]
     ).flatten()
@@ -316,6 +349,10 @@ def _facets_of(mesh: Mesh, fe: FEMesh, edges: np.ndarray) -> np.ndarray:
     return bf[chosen[fe.parent[fe.facet_index(bf)]]]
 
 
+#: boundary facets per scikit-fem FacetBasis (see _load_vector)
+FACET_CHUNK = 256
+
+
 def _load_vector(mesh: Mesh, fe: FEMesh, elem, basis, loads, t: float = 1.0) -> np.ndarray:
     """Consistent load vector: tractions and pressures integrated along the facets of
     their edges, body forces over the elements (times the thickness ``t``), point loads
@@ -327,8 +364,12 @@ def _load_vector(mesh: Mesh, fe: FEMesh, elem, basis, loads, t: float = 1.0) -> 
         if isinstance(load, (Traction, Pressure)):
             what = type(load).__name__
             edges = select_edges(mesh, load.where, what)
-            fb = skfem.FacetBasis(fe.skfem, elem, facets=_facets_of(mesh, fe, edges))
-            f += t * skfem.asm(_boundary_form(load), fb)
+            facets = _facets_of(mesh, fe, edges)
+            # in chunks: scikit-fem's inverse isoparametric map (quadratic geometry)
+            # tests convergence on the sum over all points, which a long list never meets
+            for start in range(0, len(facets), FACET_CHUNK):
+                fb = skfem.FacetBasis(fe.skfem, elem, facets=facets[start : start + FACET_CHUNK])
+                f += t * skfem.asm(_boundary_form(load), fb)
         elif isinstance(load, BodyForce):
             f += t * skfem.asm(
                 _vector_form(load.value, "BodyForce"), _body_basis(mesh, fe, basis, load)

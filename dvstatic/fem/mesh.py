@@ -60,7 +60,7 @@ class FEMesh:
         """Row in :attr:`facets` of skfem boundary facets (given by their index)."""
         fm = self.skfem
         n = len(self.points)
-        ends = np.sort(fm.facets[:, skfem_facets].T, axis=1)
+        ends = np.sort(fm.facets[:, skfem_facets].T, axis=1).astype(np.int64)  # skfem: int32
         mine = np.sort(self.facets, axis=1)
         key_mine = mine[:, 0] * n + mine[:, 1]
         order = np.argsort(key_mine)
@@ -96,9 +96,16 @@ def build(mesh: Mesh, refine: int, order: int) -> FEMesh:
     p, t, parent_t, facets, parent, s = state
     fm = skfem.MeshTri(np.ascontiguousarray(p.T), np.ascontiguousarray(t.T))
     fe = FEMesh(p, t, parent_t, facets, parent, s, curve, fm, fm)
-    if order == 2 and curve is not None:
+    if order == 2 and curve is not None and not _all_straight(mesh, curve):
         fe = _quadratic(mesh, fe)
     return fe
+
+
+def _all_straight(mesh: Mesh, curve: np.ndarray) -> bool:
+    """True if every boundary edge lies on a straight curve (no quadratic geometry
+    needed)."""
+    curves = mesh.domain.boundary_curves()
+    return all(curves[int(c)].straight for c in np.unique(curve) if c >= 0)
 
 
 def _curves(mesh: Mesh) -> np.ndarray | None:

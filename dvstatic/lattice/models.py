@@ -33,6 +33,7 @@ from ..mesh import Mesh
 from . import calibration
 from . import geometry as _geometry
 from .operator import LatticeOperator
+from .stabilise import clip_coupling, triangle_modes, triangle_tensors
 from .weights import BONDS, bond_weights, voronoi_weights
 
 if TYPE_CHECKING:  # annotations only: scipy is imported where it is used
@@ -56,18 +57,25 @@ class VoronoiModel:
     nu : float
         Poisson's ratio: -1 < nu < 1 in plane stress, -1 < nu < 0.5 in plane strain
         (within the calibration's admissible range).
-    calibration : {"paper", "relaxed"} or MicroParameters
-        How ``k_n`` and ``nu_m`` are obtained from E and nu: ``"paper"`` (closed
-        form under affine strain, eqs. 9-10 / 19-20), ``"relaxed"`` (the equilibrium,
-        non-affinely relaxed response of a periodic sample with the mesh's bond-length
-        spread matches E and nu; see :func:`dvstatic.lattice.calibration.relaxed`), or
-        given :class:`~dvstatic.lattice.calibration.MicroParameters` (used as they are;
-        a sequence of them with ``materials``: the default material's first).
-    bonds : {"uniform", "voronoi"}
-        Normal-spring stiffness of each bond: the paper's uniform ``k_n``, or
-        ``k_n w_e`` with ``w_e = sqrt(3) r_e / l_e`` (its own Voronoi side: 1 inside a
-        regular lattice, 1/2 on its surface bonds), which removes the stiff surface
-        layer. The Voronoi coupling stays per triangle, so the stiffness stays symmetric.
+    calibration : {"relaxed", "paper"} or MicroParameters
+        How ``k_n`` and ``nu_m`` are obtained from E and nu. ``"relaxed"`` (default):
+        the lattice *in equilibrium* (non-affinely relaxed) matches E and nu on a
+        periodic sample with the micro-structure of the mesh (read from the package's
+        table for the built-in generators, measured on a sample made by the mesh's
+        recipe or with its bond-length spread otherwise; see
+        :func:`dvstatic.lattice.calibration.relaxed`), with the coupling stabilised
+        per triangle, so the lattice is stable for any nu it reaches. ``"paper"``: the
+        paper's closed form under affine strain (eqs. 9-10 / 19-20), no stabilisation.
+        Or given :class:`~dvstatic.lattice.calibration.MicroParameters` (used as they
+        are; a sequence of them with ``materials``: the default material's first).
+    bonds : {"surface", "uniform", "voronoi"}
+        Normal-spring stiffness of each bond: ``"surface"`` (default) ``k_n``, and
+        ``k_n / 2`` on boundary bonds (one triangle), which carry half a cell (as on the
+        surface of a regular lattice) and would otherwise make a stiff surface layer;
+        ``"uniform"``: the paper's ``k_n`` everywhere; ``"voronoi"``: ``k_n w_e`` with
+        ``w_e = sqrt(3) r_e / l_e`` (its own Voronoi side). The Voronoi coupling stays
+        per triangle, so the stiffness stays symmetric.
+        The paper's model is ``calibration="paper", bonds="uniform"``.
     plane : {"stress", "strain"}
         Plane stress, or plane strain: the lattice is calibrated with the effective
         constants ``E* = E / (1 - nu^2)``, ``nu* = nu / (1 - nu)``; the stress recovery
@@ -96,8 +104,8 @@ class VoronoiModel:
     mesh: Mesh
     E: float
     nu: float
-    calibration: object = "paper"
-    bonds: str = "uniform"
+    calibration: object = "relaxed"
+    bonds: str = "surface"
     plane: str = "stress"
     thickness: float | None = None
     materials: object = None
@@ -238,22 +246,35 @@ class VoronoiModel:
     def bond_weight(self) -> np.ndarray:
         """Relative normal-spring stiffness of every bond, shape (n_bonds,) (ones if
         uniform)."""
-        return bond_weights(self.bonds, self.geometry)
+        return bond_weights(self.bonds, self.mesh)
 
     @cached_property
     def operator(self) -> LatticeOperator:
         """Forces and matrices of this lattice (its calibrated stiffnesses, times the
-        thickness)."""
+        thickness; stabilised couplings clipped per triangle)."""
         k_n = np.array([m.k_n for m in self.micros])
         nu_m = np.array([m.nu_m for m in self.micros])
         mat = self.material_of_triangle
-        coupling = self.t * k_n[mat] * nu_m[mat]
         if len(self.micros) == 1:
             spring = self.t * k_n[0] * self.bond_weight
-            coupling = self.t * k_n[0] * nu_m[0]
+            coupling = np.full(self.mesh.n_triangles, self.t * k_n[0] * nu_m[0])
         else:
             spring = self.t * self.bond_weight * _bond_mix(self.geometry, self.mesh, k_n[mat])
+            coupling = self.t * k_n[mat] * nu_m[mat]
+        stab = np.array([m.stabilised for m in self.micros])[mat]
+        if stab.any():
+            modes = triangle_modes(self.mesh, spring, self.barycentric_images)
+            coupling = np.where(stab, clip_coupling(modes, coupling), coupling)
         return LatticeOperator(self.mesh, spring, coupling, barycentric=self.barycentric_images)
+
+    @cached_property
+    def clipped_fraction(self) -> float:
+        """Fraction of the triangles whose coupling the stabilisation reduced (0 for
+        the paper's calibration)."""
+        k_n = np.array([m.k_n for m in self.micros])[self.material_of_triangle]
+        nu_m = np.array([m.nu_m for m in self.micros])[self.material_of_triangle]
+        full = self.t * k_n * nu_m
+        return float(np.mean(~np.isclose(self.operator.coupling, full, rtol=1e-12, atol=0)))
 
     @property
     def k_n(self) -> float:
@@ -329,6 +350,14 @@ class VoronoiModel:
         check_choice("fmt", fmt, ("csr", "bsr"))
         K = self.operator.tangent(u, strain)
         return K if fmt == "bsr" else K.tocsr()
+
+    def triangle_tensors(self) -> np.ndarray:
+        """Elasticity tensor of every triangle, Mandel (M, 3, 3), units of E (times the
+        thickness): the linear lattice is the P1 finite-element model with these
+        tensors (:func:`dvstatic.lattice.stabilise.triangle_tensors`). Isotropic on
+        equilateral triangles; their spread over an irregular mesh is what relaxes."""
+        op = self.operator
+        return triangle_tensors(self.mesh, op.spring, op.coupling, self.barycentric_images)
 
     def energy(self, u) -> float:
         """Strain energy of the linear model, ``u.K.u / 2`` (energy per unit thickness)."""

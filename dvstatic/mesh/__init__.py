@@ -11,7 +11,8 @@ from .domain import Arc, Circle, Domain, EllipseArc, Line, Path, Polygon, rectan
 from .generators import KINDS, disc, generate, lloyd, polygon, rectangle, with_spread
 from .locate import interpolate
 from .ordering import mesh_dof_order, spatial_order
-from .periodic import periodic_square
+from .periodic import periodic_sample, periodic_square
+from .recipe import Sampling
 from .topology import Topology
 
 __all__ = [
@@ -33,6 +34,8 @@ __all__ = [
     "lloyd",
     "with_spread",
     "periodic_square",
+    "periodic_sample",
+    "Sampling",
     "interpolate",
     "mesh_dof_order",
     "spatial_order",

@@ -20,6 +20,7 @@ from .._checks import check_positive, check_seed
 from .._planar import cross
 from ..errors import InputError
 from .domain import Domain
+from .recipe import Sampling
 from .sampling import move_in_domain, periodic_delaunay, unit_disc
 from .topology import Topology, build_topology
 
@@ -51,6 +52,10 @@ class Mesh:
     regions : mapping str -> array_like of int, optional
         Named regions: the triangles of each (disjoint sets; the other triangles
         belong to no region). Each region can carry its own material.
+    sampling : Sampling, optional
+        How the points were placed (set by the generators and kept by
+        :meth:`perturbed`): the relaxed calibration makes its periodic sample by the
+        same recipe. None for meshes built from points and triangles.
 
     Raises
     ------
@@ -69,8 +74,13 @@ class Mesh:
     images: np.ndarray | None = None
     domain: Domain | None = None
     regions: Mapping[str, np.ndarray] = field(default_factory=dict)
+    sampling: Sampling | None = None
 
     def __post_init__(self) -> None:
+        if self.sampling is not None and not isinstance(self.sampling, Sampling):
+            raise TypeError(
+                f"sampling must be a Sampling or None, got {type(self.sampling).__name__}"
+            )
         p = _as_points(self.points)
         _check_duplicates(p)
         t = _as_triangles(self.triangles, len(p))
@@ -333,17 +343,18 @@ class Mesh:
         p = np.array(self.points)
         if amplitude == 0:
             return self
+        sampling = None if self.sampling is None else self.sampling.perturbed(amplitude)
         if self.is_periodic:
             p = np.mod(p + unit_disc(rng, len(p)) * amplitude, self.period)
             p[p >= self.period] = 0.0
             tri, images = periodic_delaunay(p, self.period)
-            return Mesh(p, tri, period=self.period, images=images)
+            return Mesh(p, tri, period=self.period, images=images, sampling=sampling)
         if self.domain is None:
             bnd = self.boundary_nodes
             inner = np.setdiff1d(np.arange(self.n_points), bnd)
             p[inner] += unit_disc(rng, inner.size) * amplitude
             try:
-                return Mesh(p, self.triangles, parts=dict(self.parts))
+                return Mesh(p, self.triangles, parts=dict(self.parts), sampling=sampling)
             except InputError as exc:
                 raise InputError(
                     f"perturbation of amplitude {amplitude} inverts triangles of this mesh "
@@ -353,7 +364,7 @@ class Mesh:
         tol = 1e-9 * self.h
         p = move_in_domain(self.domain, p, amplitude, rng, tol)
         p, tri, parts, regions = self.domain.triangulate(p, tol, segments=self._segments(p))
-        return Mesh(p, tri, parts=parts, regions=regions, domain=self.domain)
+        return Mesh(p, tri, parts=parts, regions=regions, domain=self.domain, sampling=sampling)
 
     def _segments(self, p: np.ndarray) -> np.ndarray | None:
         """Region segments at points ``p``: consecutive nodes along every region curve,

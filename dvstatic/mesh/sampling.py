@@ -5,12 +5,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._planar import cross
+from .._planar import circumcentres, cross
 from ..errors import InputError
 from .domain import Domain
 from .topology import build_topology
 
-__all__ = ["unit_disc", "move_in_domain", "periodic_delaunay"]
+__all__ = ["unit_disc", "move_in_domain", "periodic_delaunay", "cell_centroids"]
 
 
 def unit_disc(rng: np.random.Generator, n: int) -> np.ndarray:
@@ -55,6 +55,37 @@ def move_in_domain(domain: Domain, p: np.ndarray, amplitude: float, rng, tol: fl
         p[idx[good]] = trial[good]
         idx = idx[~good]
     return p
+
+
+def cell_centroids(
+    x: np.ndarray, tri: np.ndarray, n: int, offsets: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Areas (n,) and centroids (n, 2) of the Voronoi cells of ``n`` points, from the
+    Delaunay triangles ``tri`` (M, 3) with vertex positions ``x`` (M, 3, 2): each
+    triangle adds, for each of its vertices, the two sub-triangles (vertex, edge
+    midpoint, circumcentre), signed so that obtuse triangles subtract what lies outside.
+    Cells of points on the hull are clipped to it (Lloyd iterations keep those fixed).
+    ``offsets`` (M, 3, 2) (periodic meshes: image times period) is subtracted from the
+    pieces of each vertex, so that its centroid is near its own position."""
+    cc = circumcentres(x)
+    area = np.zeros(n)
+    moment = np.zeros((n, 2))
+    for k in range(3):
+        o, a = (k + 1) % 3, (k + 2) % 3
+        mid = 0.5 * (x[:, o] + x[:, a])
+        # the sub-triangle counts negative when the circumcentre lies beyond the edge
+        sign = np.sign(np.einsum("mi,mi->m", cc - mid, x[:, k] - mid))
+        for v in (o, a):
+            xv = x[:, v]
+            sa = 0.5 * np.abs(cross(mid - xv, cc - xv)) * sign
+            c = (xv + mid + cc) / 3.0
+            if offsets is not None:
+                c = c - offsets[:, v]
+            area += np.bincount(tri[:, v], sa, n)
+            for d in range(2):
+                moment[:, d] += np.bincount(tri[:, v], sa * c[:, d], n)
+    safe = np.where(area > 0, area, 1.0)
+    return area, moment / safe[:, None]
 
 
 def _all_distances(domain: Domain, p: np.ndarray) -> np.ndarray:

@@ -201,12 +201,16 @@ def micro_parameters(model, lay: Layout, allreduce) -> tuple:
     own_b = owned_bonds(lay)
     constants = [m.in_plane for m in model.all_materials]
     if model.calibration == "relaxed":
-        spread = _interior_spread(model.mesh, lay, geom, own_b, allreduce)
+        # the recipe (or the table) is the same on every rank; without one, the
+        # sample matches the interior spread, summed over ranks
+        spread = None
+        if model.mesh.sampling is None or not model.mesh.sampling.reproducible:
+            spread = _interior_spread(model.mesh, lay, geom, own_b, allreduce)
         return tuple(
             calibration.relaxed(model.kind, model.mesh, E2, nu2, model.bonds, spread=spread)
             for E2, nu2 in constants
         )
-    w = bond_weights(model.bonds, geom)
+    w = bond_weights(model.bonds, lay.patch)
     sums = calibration.moment_sums(model.kind, geom, w, own_b, owned_triangles(lay))
     mom = calibration.moments_from_sums(allreduce(sums), model.mesh.area)
     return tuple(calibration.paper_from_moments(model.kind, mom, E2, nu2) for E2, nu2 in constants)

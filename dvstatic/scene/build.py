@@ -12,7 +12,7 @@ from ..io import read_mesh
 from ..lattice import DV, RV
 from ..mesh import generators as meshgen
 from ..mesh.domain import Circle, Domain, Polygon, rectangle_domain
-from ..problem import BodyForce, Fix, PointLoad, Traction
+from ..problem import BodyForce, Fix, PointLoad, Pressure, Traction
 from .schema import SOLVER_KEYS, SceneError
 
 __all__ = ["Scene"]
@@ -37,12 +37,15 @@ class Scene:
         m = self.data["mesh"]
         if m["type"] == "file":
             return self._read_mesh(m["path"])
-        holes = [self._hole(i, h) for i, h in enumerate(m["holes"])]
+        holes = [self._loop(f"mesh.holes[{i}]", h) for i, h in enumerate(m["holes"])]
+        regions = [self._loop(f"mesh.regions[{i}]", r) for i, r in enumerate(m["regions"])]
         common = {"kind": m["kind"], "jitter": m["jitter"], "seed": m["seed"]}
         try:
             if m["type"] == "rectangle" and not holes:
-                return meshgen.rectangle(m["width"], m["height"], m["h"], **common)
-            domain = Domain(self._outer(m), tuple(holes))
+                return meshgen.rectangle(
+                    m["width"], m["height"], m["h"], regions=tuple(regions), **common
+                )
+            domain = Domain(self._outer(m), tuple(holes), tuple(regions))
             return meshgen.generate(domain, m["h"], **common)
         except InputError as exc:
             raise self._err(_MESH_KEYS.get(exc.param, "mesh"), exc) from None
@@ -58,13 +61,14 @@ class Scene:
         except InputError as exc:
             raise self._err("mesh.path", exc) from None
 
-    def _hole(self, i: int, h: dict):
+    def _loop(self, key: str, h: dict):
+        """A hole or region loop: a circle or a polygon, named."""
         try:
             if h["type"] == "circle":
                 return Circle(tuple(h["center"]), h["radius"], h["name"])
             return Polygon(np.asarray(h["vertices"]), (h["name"],) * len(h["vertices"]))
         except (InputError, TypeError) as exc:
-            raise self._err(f"mesh.holes[{i}]", exc) from None
+            raise self._err(key, exc) from None
 
     def _outer(self, m: dict):
         if m["type"] == "rectangle":
@@ -80,9 +84,18 @@ class Scene:
         return Circle(tuple(m["center"]), m["radius"], "boundary")
 
     def build_model(self, mesh):
-        """The DV or RV model of ``[model]`` and ``[material]``."""
+        """The DV or RV model of ``[model]``, ``[material]`` and ``[[materials]]``."""
         cls = DV if self.data["model"]["type"] == "DV" else RV
         mat = self.data["material"]
+        for i, other in enumerate(self.data["materials"]):
+            if other["region"] not in mesh.regions:
+                known = ", ".join(repr(k) for k in mesh.regions) or "none"
+                raise SceneError(
+                    self.path,
+                    f"materials[{i}].region",
+                    f"unknown region {other['region']!r}; the mesh's regions: {known}",
+                )
+        materials = {m["region"]: (m["E"], m["nu"]) for m in self.data["materials"]}
         try:
             return cls(
                 mesh,
@@ -90,6 +103,9 @@ class Scene:
                 mat["nu"],
                 calibration=self.data["model"]["calibration"],
                 bonds=self.data["model"]["bonds"],
+                plane=mat["plane"],
+                thickness=mat["thickness"],
+                materials=materials or None,
             )
         except CalibrationError as exc:
             raise self._err("material.nu", exc) from None
@@ -120,7 +136,9 @@ class Scene:
     def build_supports(self, mesh) -> list:
         out = []
         for i, s in enumerate(self.data["supports"]):
-            out.append(Fix(self._nodes(mesh, s, f"supports[{i}]"), x=s["x"], y=s["y"]))
+            x = Profile(s["x_at"]) if s["x_at"] is not None else s["x"]
+            y = Profile(s["y_at"]) if s["y_at"] is not None else s["y"]
+            out.append(Fix(self._nodes(mesh, s, f"supports[{i}]"), x=x, y=y))
         return out
 
     def build_loads(self, mesh) -> list:
@@ -128,9 +146,20 @@ class Scene:
         for i, ld in enumerate(self.data["loads"]):
             key = f"loads[{i}]"
             if ld["type"] == "body":
-                out.append(BodyForce(tuple(ld["value"])))
+                region = ld["region"]
+                if region is not None and region not in mesh.regions:
+                    known = ", ".join(repr(k) for k in mesh.regions) or "none"
+                    raise SceneError(
+                        self.path, f"{key}.region", f"unknown region {region!r}; known: {known}"
+                    )
+                out.append(BodyForce(tuple(ld["value"]), region=region))
             elif ld["type"] == "traction":
-                out.append(Traction(self._nodes(mesh, ld, key), tuple(ld["value"])))
+                value = Profile(ld["value_at"]) if ld["value_at"] is not None else ld["value"]
+                out.append(Traction(self._nodes(mesh, ld, key), value))
+            elif ld["type"] == "pressure":
+                out.append(
+                    Pressure(self._nodes(mesh, ld, key), _pressure(ld), follower=ld["follower"])
+                )
             else:
                 out.append(PointLoad(self._nodes(mesh, ld, key), tuple(ld["value"])))
         return out
@@ -139,6 +168,48 @@ class Scene:
         """Keyword options of :func:`dvstatic.solve` from ``[solver]``."""
         s = self.data["solver"]
         return {name: s[key] for key, name in SOLVER_KEYS.items()}
+
+
+class Profile:
+    """A value interpolated linearly along the line between two points (constant beyond
+    its ends): rows ``[x0, y0, v...]`` and ``[x1, y1, v...]``. Called with points (m, 2)
+    it returns (m,) for one value per row, (m, k) for k."""
+
+    def __init__(self, rows):
+        r = np.asarray(rows, dtype=float)
+        self.a, self.b = r[0, :2], r[1, :2]
+        self.va, self.vb = r[0, 2:], r[1, 2:]
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        d = self.b - self.a
+        t = np.clip((np.asarray(x) - self.a) @ d / (d @ d), 0.0, 1.0)
+        v = self.va + t[:, None] * (self.vb - self.va)
+        return v[:, 0] if v.shape[1] == 1 else v
+
+    def __repr__(self) -> str:
+        ends = f"{self.a.tolist()}: {self.va.tolist()} -> {self.b.tolist()}: {self.vb.tolist()}"
+        return f"Profile({ends})"
+
+
+class Hydrostatic:
+    """``p + gamma (level - y)`` below the level, ``p`` above it."""
+
+    def __init__(self, p: float, gamma: float, level: float):
+        self.p, self.gamma, self.level = p, gamma, level
+
+    def __call__(self, x: np.ndarray) -> np.ndarray:
+        return self.p + self.gamma * np.maximum(self.level - np.asarray(x)[:, 1], 0.0)
+
+    def __repr__(self) -> str:
+        return f"Hydrostatic(p={self.p:g}, gamma={self.gamma:g}, level={self.level:g})"
+
+
+def _pressure(ld: dict):
+    if ld["p_at"] is not None:
+        return Profile(ld["p_at"])
+    if ld["gamma"] is not None:
+        return Hydrostatic(ld["p"] or 0.0, ld["gamma"], ld["level"])
+    return ld["p"]
 
 
 #: scene key of the mesh generator's arguments (InputError.param -> key path)
@@ -161,4 +232,7 @@ _MODEL_KEYS = {
     "nu": "material.nu",
     "calibration": "model.calibration",
     "bonds": "model.bonds",
+    "plane": "material.plane",
+    "thickness": "material.thickness",
+    "materials": "materials",
 }

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
+from ..mesh.generators import DEFAULT_JITTER
 from ..solvers.options import ALIASES, SolveOptions
 
 log = logging.getLogger(__name__)
@@ -51,6 +52,20 @@ HOLE = {
     "vertices": F("points", "polygon corners (length)"),
 }
 
+REGION = {
+    "type": F("string", "region shape", required=True, choices=("circle", "polygon")),
+    "name": F("string", "region name", required=True),
+    "center": F("point", "circle centre (length)"),
+    "radius": F("number", "circle radius (length)"),
+    "vertices": F("points", "polygon corners (length)"),
+}
+
+#: a linear profile between two points: rows [x, y, value...]
+PROFILE_DOC = (
+    "linear profile [[x0, y0, {v}], [x1, y1, {v}]]: the value at a point is interpolated "
+    "along the line from (x0, y0) to (x1, y1) (constant beyond its ends)"
+)
+
 SCHEMA: dict[str, F] = {
     "title": F("string", "free text shown in the summary", default=""),
     "mesh": F(
@@ -68,7 +83,9 @@ SCHEMA: dict[str, F] = {
                 default="jittered",
                 choices=("lattice", "jittered", "random", "cvt"),
             ),
-            "jitter": F("number", "relative jitter of kind = jittered, in [0, 0.5)", default=0.3),
+            "jitter": F(
+                "number", "relative jitter of kind = jittered, in [0, 0.5)", default=DEFAULT_JITTER
+            ),
             "seed": F("int", "random seed", default=0),
             "width": F(
                 "number", "rectangle: size along x (length); parts bottom, right, top, left"
@@ -84,15 +101,50 @@ SCHEMA: dict[str, F] = {
                 "physical line groups become parts",
             ),
             "holes": F("tables", "holes of a rectangle, polygon or disc", default=[], schema=HOLE),
+            "regions": F(
+                "tables",
+                "named regions inside the body (the triangles conform to them); give each "
+                "its own material with [[materials]] or its own body force",
+                default=[],
+                schema=REGION,
+            ),
         },
     ),
     "material": F(
         "table",
-        "plane-stress continuum",
+        "the continuum (of the triangles outside the [[materials]] regions)",
         required=True,
         schema={
             "E": F("number", "Young's modulus (force/area), > 0", required=True),
-            "nu": F("number", "Poisson's ratio, -1 < nu < 1", required=True),
+            "nu": F(
+                "number",
+                "Poisson's ratio: -1 < nu < 1 in plane stress, -1 < nu < 0.5 in plane strain",
+                required=True,
+            ),
+            "plane": F(
+                "string",
+                "plane stress (thin plate) or plane strain (long body: tunnels, dams, "
+                "cylinders; szz = nu (sxx + syy) is reported)",
+                default="stress",
+                choices=("stress", "strain"),
+            ),
+            "thickness": F(
+                "number",
+                "out-of-plane thickness (length): forces become totals (tractions, "
+                "pressures and body forces stay per area and volume, point loads are "
+                "total forces); omit for per unit thickness",
+            ),
+        },
+    ),
+    "materials": F(
+        "tables",
+        "other materials on named regions of the mesh ([[mesh.regions]], or physical "
+        "surfaces of a gmsh file)",
+        default=[],
+        schema={
+            "region": F("string", "region name", required=True),
+            "E": F("number", "Young's modulus (force/area), > 0", required=True),
+            "nu": F("number", "Poisson's ratio", required=True),
         },
     ),
     "model": F(
@@ -108,18 +160,19 @@ SCHEMA: dict[str, F] = {
             ),
             "calibration": F(
                 "string",
-                "micro-parameters: paper (closed form, affine strain) or "
-                "relaxed (matches E and nu in equilibrium on a periodic sample "
-                "with the mesh's bond-length spread)",
-                default="paper",
-                choices=("paper", "relaxed"),
+                "micro-parameters: relaxed (the lattice in equilibrium matches E and nu "
+                "on a periodic sample made like the mesh; stabilised coupling) or paper "
+                "(the paper's closed form under affine strain)",
+                default="relaxed",
+                choices=("relaxed", "paper"),
             ),
             "bonds": F(
                 "string",
-                "normal-spring stiffness: uniform (the paper's k_n) or "
-                "voronoi (k_n sqrt(3) r/l: no stiff surface layer)",
-                default="uniform",
-                choices=("uniform", "voronoi"),
+                "normal-spring stiffness: surface (k_n, half on boundary bonds: no stiff "
+                "surface layer), uniform (the paper's k_n) or voronoi (k_n sqrt(3) r/l). "
+                "The paper's model: calibration = paper, bonds = uniform",
+                default="surface",
+                choices=("surface", "uniform", "voronoi"),
             ),
         },
     ),
@@ -133,24 +186,45 @@ SCHEMA: dict[str, F] = {
             "x": F("number", "prescribed u_x (length); omit to leave free"),
             "y": F(
                 "number",
-                "prescribed u_y (length); omit to leave free. Neither x nor y: clamp (both 0)",
+                "prescribed u_y (length); omit to leave free. Neither x nor y (nor their "
+                "profiles): clamp (both 0)",
             ),
+            "x_at": F("rows", "instead of x: u_x as a " + PROFILE_DOC.format(v="ux")),
+            "y_at": F("rows", "instead of y: u_y as a " + PROFILE_DOC.format(v="uy")),
         },
     ),
     "loads": F(
         "tables",
-        "applied loads (dead loads, per unit thickness)",
+        "applied loads (per unit thickness, or per area with a thickness)",
         default=[],
         schema={
             "type": F(
                 "string",
-                "traction: force/length on a part; body: force/area; point: force on nodes",
+                "traction: force/length on a part; pressure: normal pressure on a part "
+                "(positive pushes into the body); body: force/area; point: force on nodes",
                 required=True,
-                choices=("traction", "body", "point"),
+                choices=("traction", "pressure", "body", "point"),
             ),
-            "where": F("nodes", "traction: part name; point: part name or node indices"),
+            "where": F("nodes", "traction, pressure: part name; point: part name or node indices"),
             "at": F("point", "point: instead of where, the node nearest to this point"),
-            "value": F("point", "force vector (fx, fy)", required=True),
+            "value": F("point", "force vector (fx, fy): traction, body, point"),
+            "value_at": F(
+                "rows", "traction: instead of value, a " + PROFILE_DOC.format(v="tx, ty")
+            ),
+            "p": F("number", "pressure: its value (force/area); with gamma, at the level"),
+            "p_at": F("rows", "pressure: instead of p, a " + PROFILE_DOC.format(v="p")),
+            "gamma": F(
+                "number",
+                "pressure: hydrostatic, p + gamma (level - y) below the level, p above "
+                "(gamma: unit weight of the fluid, force/volume)",
+            ),
+            "level": F("number", "pressure with gamma: the free-surface height y (length)"),
+            "follower": F(
+                "bool",
+                "pressure: follows the deformed boundary in nonlinear solves",
+                default=False,
+            ),
+            "region": F("string", "body: only on this region of the mesh"),
         },
     ),
     "solver": F("table", "how to solve (the options of dv.solve)", default={}, schema=None),
@@ -166,7 +240,7 @@ SCHEMA: dict[str, F] = {
                 "string",
                 "colour of the picture",
                 default="|u|",
-                choices=("|u|", "ux", "uy", "sxx", "syy", "sxy", "von_mises"),
+                choices=("|u|", "ux", "uy", "sxx", "syy", "sxy", "szz", "von_mises"),
             ),
             "stress": F(
                 "string",
@@ -349,6 +423,15 @@ def _check_value(path, where: str, v, f: F):
         ):
             fail("an array of [x, y] pairs")
         return [[float(x) for x in p] for p in v]
+    if k == "rows":
+        if not isinstance(v, list) or not all(
+            isinstance(r, list)
+            and r
+            and all(isinstance(x, numbers.Real) and not isinstance(x, bool) for x in r)
+            for r in v
+        ):
+            fail("an array of arrays of numbers")
+        return [[float(x) for x in r] for r in v]
     if k == "nodes":
         if isinstance(v, str):
             return v
@@ -387,25 +470,36 @@ def _check_rules(path, d: dict) -> None:
                 raise SceneError(path, f"mesh.holes[{i}].{key}", f"required for a {h['type']} hole")
     if m["type"] == "file" and m["holes"]:
         raise SceneError(path, "mesh.holes", "holes cannot be added to a mesh read from a file")
-    nu = d["material"]["nu"]
-    if not -1.0 < nu < 1.0:
-        raise SceneError(path, "material.nu", f"{nu} is outside the plane-stress range -1 < nu < 1")
-    if d["material"]["E"] <= 0:
-        raise SceneError(path, "material.E", f"must be > 0, got {d['material']['E']}")
+    _check_material(path, "material", d["material"], d["material"]["plane"])
+    if d["material"]["thickness"] is not None and d["material"]["thickness"] <= 0:
+        raise SceneError(path, "material.thickness", "must be > 0")
+    seen = set()
+    for i, mat in enumerate(d["materials"]):
+        _check_material(path, f"materials[{i}]", mat, d["material"]["plane"])
+        if mat["region"] in seen:
+            raise SceneError(path, f"materials[{i}].region", f"{mat['region']!r} given twice")
+        seen.add(mat["region"])
+    for i, r in enumerate(m["regions"]):
+        need_r = ("center", "radius") if r["type"] == "circle" else ("vertices",)
+        for key in need_r:
+            if r[key] is None:
+                raise SceneError(
+                    path, f"mesh.regions[{i}].{key}", f"required for a {r['type']} region"
+                )
+    if m["type"] == "file" and m["regions"]:
+        raise SceneError(
+            path, "mesh.regions", "a mesh file brings its regions (gmsh physical surfaces)"
+        )
     for i, s in enumerate(d["supports"]):
         if (s["where"] is None) == (s["at"] is None):
             raise SceneError(path, f"supports[{i}]", "give exactly one of `where` or `at`")
+        for c in ("x", "y"):
+            if s[c] is not None and s[f"{c}_at"] is not None:
+                raise SceneError(path, f"supports[{i}].{c}_at", f"give {c} or {c}_at, not both")
+            if s[f"{c}_at"] is not None:
+                _check_profile(path, f"supports[{i}].{c}_at", s[f"{c}_at"], 1)
     for i, ld in enumerate(d["loads"]):
-        if ld["type"] == "traction":
-            if not isinstance(ld["where"], str) or ld["at"] is not None:
-                raise SceneError(
-                    path, f"loads[{i}].where", "a traction needs `where` = a boundary part name"
-                )
-        elif ld["type"] == "point":
-            if (ld["where"] is None) == (ld["at"] is None):
-                raise SceneError(path, f"loads[{i}]", "give exactly one of `where` or `at`")
-        elif ld["where"] is not None or ld["at"] is not None:
-            raise SceneError(path, f"loads[{i}]", "a body force acts everywhere: no where/at")
+        _check_load(path, f"loads[{i}]", ld)
     if not d["supports"]:
         raise SceneError(
             path, "supports", "no supports: add [[supports]] tables that prevent rigid-body motion"
@@ -417,6 +511,62 @@ def _check_rules(path, d: dict) -> None:
         raise SceneError(path, "output.fe_refine", f"must be in [0, 6], got {o['fe_refine']}")
     if o["scale"] is not None and o["scale"] <= 0:
         raise SceneError(path, "output.scale", f"must be > 0, got {o['scale']}")
+
+
+def _check_material(path, key: str, mat: dict, plane: str) -> None:
+    if mat["E"] <= 0:
+        raise SceneError(path, f"{key}.E", f"must be > 0, got {mat['E']}")
+    hi = 1.0 if plane == "stress" else 0.5
+    if not -1.0 < mat["nu"] < hi:
+        raise SceneError(
+            path, f"{key}.nu", f"{mat['nu']} is outside the plane-{plane} range -1 < nu < {hi:g}"
+        )
+
+
+def _check_profile(path, key: str, rows: list, n_values: int) -> None:
+    """A linear profile: two rows [x, y, value...] at two different points."""
+    if len(rows) != 2 or any(len(r) != 2 + n_values for r in rows):
+        vals = ", ".join(["v"] * n_values)
+        raise SceneError(path, key, f"expected two rows [x, y, {vals}], got {rows!r}")
+    if rows[0][:2] == rows[1][:2]:
+        raise SceneError(path, key, "the two points of a profile must differ")
+
+
+#: keys each load type accepts (besides type)
+_LOAD_KEYS = {
+    "traction": ("where", "value", "value_at"),
+    "pressure": ("where", "p", "p_at", "gamma", "level", "follower"),
+    "body": ("value", "region"),
+    "point": ("where", "at", "value"),
+}
+
+
+def _check_load(path, key: str, ld: dict) -> None:
+    kind = ld["type"]
+    for k, v in ld.items():
+        given = v is not None and v is not False
+        if k != "type" and given and k not in _LOAD_KEYS[kind]:
+            raise SceneError(path, f"{key}.{k}", f"not a key of a {kind} load")
+    if kind in ("traction", "pressure") and not isinstance(ld["where"], str):
+        raise SceneError(path, f"{key}.where", f"a {kind} needs `where` = a boundary part name")
+    if kind == "point" and (ld["where"] is None) == (ld["at"] is None):
+        raise SceneError(path, key, "give exactly one of `where` or `at`")
+    if kind in ("body", "point") and ld["value"] is None:
+        raise SceneError(path, f"{key}.value", f"required for a {kind} load")
+    if kind == "traction":
+        if (ld["value"] is None) == (ld["value_at"] is None):
+            raise SceneError(path, key, "give exactly one of `value` or `value_at`")
+        if ld["value_at"] is not None:
+            _check_profile(path, f"{key}.value_at", ld["value_at"], 2)
+    if kind == "pressure":
+        if (ld["p"] is None) == (ld["p_at"] is None) and ld["gamma"] is None:
+            raise SceneError(path, key, "give exactly one of `p`, `p_at` (or `gamma`)")
+        if ld["p_at"] is not None:
+            if ld["p"] is not None or ld["gamma"] is not None:
+                raise SceneError(path, f"{key}.p_at", "give p_at alone (no p, no gamma)")
+            _check_profile(path, f"{key}.p_at", ld["p_at"], 1)
+        if (ld["gamma"] is None) != (ld["level"] is None):
+            raise SceneError(path, key, "a hydrostatic pressure needs both `gamma` and `level`")
 
 
 def reference_markdown() -> str:

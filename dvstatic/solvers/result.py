@@ -16,6 +16,7 @@ import numpy as np
 from ..errors import InputError
 from ..lattice import VoronoiModel
 from ..lattice.stress import node_stress, out_of_plane_stress, strain_stress
+from .recovery import recovered_stress
 
 __all__ = [
     "Solution",
@@ -29,7 +30,7 @@ __all__ = [
 ]
 
 #: stress recoveries of :meth:`Solution.stress`
-STRESS_METHODS = ("virial", "strain")
+STRESS_METHODS = ("recovered", "virial", "strain")
 
 
 class _Record:
@@ -79,7 +80,12 @@ def _dictish(value):
 
 @dataclass(frozen=True)
 class Timings(_Record):
-    """Wall-clock seconds per stage of a solve (0 where a stage did not run)."""
+    """Wall-clock seconds per stage of a solve (0 where a stage did not run).
+
+    ``calibration`` is what the model's calibration took when the model was made (0 if
+    it came from a cache); serial solves do not count it in ``total``, the distributed
+    engine (which calibrates during the solve) does.
+    """
 
     geometry: float = 0.0
     calibration: float = 0.0
@@ -286,17 +292,32 @@ class Solution:
             return self.model.bond_tension(self.u)
         return self.model.linear_tension(self.u)
 
-    def stress(self, method: str = "virial") -> np.ndarray:
-        """Per-node stress, shape (N, 2, 2).
+    def stress(self, method: str | None = None) -> np.ndarray:
+        """Per-node stress, shape (N, 2, 2) (force per area).
 
         Parameters
         ----------
-        method : {"virial", "strain"}
-            ``virial``: the lattice's own force-based stress over each Voronoi cell
-            (:func:`dvstatic.post.node_stress`); ``strain``: the plane-stress law
-            applied to the area-averaged lattice strain
-            (:func:`dvstatic.post.strain_stress`), better at free surfaces.
+        method : {"recovered", "virial", "strain"}, optional
+            ``recovered`` (the default for linear solutions): a patch fit of the lattice
+            strain with each node's continuum law, and at free or loaded boundaries the
+            known stress vector with the strain measured along the boundary
+            (:func:`dvstatic.solvers.recovery.recovered_stress`); right at surfaces,
+            holes and curved edges. ``virial`` (the default for nonlinear solutions: the
+            Cauchy stress of the deformed lattice): the lattice's own force-based
+            stress over each Voronoi cell (:func:`dvstatic.post.node_stress`), which
+            surface particles overestimate. ``strain``: the continuum law applied to
+            the area-averaged lattice strain (:func:`dvstatic.post.strain_stress`).
         """
+        if method is None:
+            method = "virial" if self.info.nonlinear else "recovered"
+        if method == "recovered":
+            if self.info.nonlinear:
+                raise InputError(
+                    "the recovered stress applies the linear law to small strains; use "
+                    "method='virial' for a nonlinear solution",
+                    "method",
+                )
+            return recovered_stress(self.model, self.u, self.supports, self.loads)
         if method == "virial":
             return node_stress(self.model, self.u, linear=not self.info.nonlinear)
         if method == "strain":
@@ -305,9 +326,9 @@ class Solution:
             f"unknown stress method {method!r}; accepted: {', '.join(STRESS_METHODS)}", "method"
         )
 
-    def out_of_plane_stress(self, method: str = "virial") -> np.ndarray:
+    def out_of_plane_stress(self, method: str | None = None) -> np.ndarray:
         """``szz`` per node, shape (N,): ``nu (sxx + syy)`` in plane strain (of the
-        in-plane stress of ``method``), zero in plane stress."""
+        in-plane stress of ``method``, see :meth:`stress`), zero in plane stress."""
         return out_of_plane_stress(self.model, self.stress(method))
 
     def energy(self) -> float:

@@ -45,7 +45,9 @@ class StabilityReport:
     Attributes
     ----------
     lambda_min, lambda_max : float
-        Extreme generalised eigenvalues of ``K1 v = lambda K0 v``.
+        Extreme generalised eigenvalues of ``K1 v = lambda K0 v``. For a stabilised
+        lattice (the relaxed calibration), those of its actual coupling relative to
+        its springs: every nu_m is admissible there, and ``margin = 1 + lambda_min``.
     nu_m_range : (float, float)
         Open interval of ``nu_m`` for which the stiffness is positive definite.
     nu_range : (float, float)
@@ -115,13 +117,8 @@ def nu_of_nu_m(model: VoronoiModel, nu_m: float) -> float:
         den = nu_m * m.m1 + 3 * m.alpha
         return float((m.alpha + nu_m * m.m2) / den) if den != 0 else float("inf")
     if micro.calibration == "relaxed":
-        # the very sample the calibration used (cached by spread, size asked for, seed)
-        rev = calibration.rev_for_spread(
-            micro.details["sigma_L_mesh"], *micro.details["sample_request"]
-        )
-        r = calibration.relaxed_moduli(model.kind, rev, nu_m, model.bonds)
-        # at the mesh's stability limit the sample may itself be unstable: no value
-        return float(r["nu"]) if r["stable"] else float("nan")
+        curve, _ = calibration.moduli_curve(model.kind, model.mesh, model.bonds)
+        return curve(nu_m)[0]
     return float("nan")
 
 
@@ -147,8 +144,10 @@ def stability(model: VoronoiModel, supports=None) -> StabilityReport:
     """
     check_model(model)
     t0 = time.perf_counter()
-    K0, K1 = stiffness_parts(model)
     free = _free_dofs(model, supports)
+    if any(m.stabilised for m in model.micros):
+        return _stabilised_report(model, free, t0)
+    K0, K1 = stiffness_parts(model)
     A = K1[free][:, free]
     B = K0[free][:, free]
     A = 0.5 * (A + A.T)
@@ -170,6 +169,32 @@ def stability(model: VoronoiModel, supports=None) -> StabilityReport:
         method,
     )
     log.info("stability: %s", rep)
+    return rep
+
+
+def _stabilised_report(model: VoronoiModel, free: np.ndarray, t0: float) -> StabilityReport:
+    """A stabilised lattice is positive definite for every nu_m (each triangle is): the
+    report gives the eigenvalues of its actual coupling relative to its springs."""
+    op = model.operator
+    Ks = LatticeOperator(model.mesh, op.spring, 0.0, model.barycentric_images).stiffness_bsr
+    K = op.stiffness_bsr.tocsr()[free][:, free]
+    B = Ks.tocsr()[free][:, free]
+    A = K - B
+    A = 0.5 * (A + A.T)
+    lam_min, lam_max, min_eig, method = _extreme_eigenvalues(A, B, K)
+    rep = StabilityReport(
+        lam_min,
+        lam_max,
+        (-np.inf, np.inf),
+        tuple(float(v) for v in model.micro.nu_range),
+        float(model.nu_m),
+        bool(1 + lam_min > 0),
+        float(1 + lam_min),
+        min_eig,
+        time.perf_counter() - t0,
+        method,
+    )
+    log.info("stability (stabilised coupling): %s", rep)
     return rep
 
 

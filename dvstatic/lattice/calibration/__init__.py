@@ -1,9 +1,11 @@
 """Micro-parameters ``k_n`` and ``nu_m`` from the macroscopic E and nu.
 
+* ``"relaxed"`` (:mod:`.relaxed`, the default): matches E and nu of the equilibrium
+  (non-affinely relaxed) response of a periodic sample with the mesh's micro-structure
+  (tabulated for the built-in generators, :mod:`.table`), with the coupling
+  stabilised per triangle;
 * ``"paper"`` (:mod:`.paper`): the paper's closed form under affine strain
-  (eqs. 9-10 for DV, 19-20 for RV with derived RV moments);
-* ``"relaxed"`` (:mod:`.relaxed`): matches E and nu of the equilibrium (non-affinely
-  relaxed) response of a periodic sample with the mesh's bond-length spread.
+  (eqs. 9-10 for DV, 19-20 for RV with derived RV moments).
 """
 
 from .base import CALIBRATIONS, MicroParameters, Moments
@@ -22,6 +24,7 @@ from .relaxed import (
     relaxed,
     relaxed_moduli,
     rev_for_spread,
+    sample_for,
 )
 
 __all__ = [
@@ -40,4 +43,5 @@ __all__ = [
     "relaxed",
     "relaxed_moduli",
     "rev_for_spread",
+    "sample_for",
 ]

@@ -11,7 +11,7 @@ from ...errors import InputError
 __all__ = ["Moments", "MicroParameters", "CALIBRATIONS"]
 
 #: calibrations the models accept by name
-CALIBRATIONS = ("paper", "relaxed")
+CALIBRATIONS = ("relaxed", "paper")
 
 
 @dataclass(frozen=True)
@@ -38,6 +38,12 @@ class MicroParameters:
     moments : Moments
     nu_range : tuple of float
         Open interval of nu for which this calibration has a solution on this mesh.
+    details : dict, optional
+        How the values were obtained (source, sample, evaluations, seconds, ...).
+    stabilised : bool
+        The coupling of every triangle is clipped so that the triangle stays positive
+        definite (:mod:`dvstatic.lattice.stabilise`); the relaxed calibration's values
+        hold for the clipped lattice.
     """
 
     k_n: float
@@ -46,6 +52,7 @@ class MicroParameters:
     moments: Moments | None = None
     nu_range: tuple[float, float] = (float("nan"), float("nan"))
     details: dict | None = None
+    stabilised: bool = False
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.k_n) and self.k_n > 0):

@@ -1,17 +1,30 @@
 """The relaxed calibration: ``k_n`` and ``nu_m`` for which the lattice *in equilibrium*
 (non-affinely relaxed) matches E and nu.
 
-A periodic sample with the bond-length spread of the mesh (:func:`rev_for_spread`) is
-probed with three unit strains; the periodic fluctuations that equilibrate it are
-solved for (one LU factorisation, three solves), giving the relaxed Poisson's ratio
-``nu_eff(nu_m)`` and modulus ``E_eff(nu_m)`` at ``k_n = 1`` (:func:`relaxed_moduli`).
-A root find on ``nu_eff(nu_m) = nu``, started from the paper's ``nu_m``, gives
-``nu_m``; then ``k_n = E / E_eff(nu_m)``.
+The equilibrium moduli of a lattice depend on its micro-structure, so they are
+measured on a periodic sample with the micro-structure of the mesh's interior:
+
+1. meshes from the built-in generators carry their recipe (:attr:`Mesh.sampling`);
+   for the tabulated recipes the moduli are read from the package's table
+   (:mod:`.table`, no cost);
+2. other recipes (other jitters outside the table, perturbed meshes, Voronoi-weighted
+   bonds) get a periodic sample made by the same recipe (:func:`periodic_sample`);
+3. meshes without a recipe (imported, or built from points) get a perturbed lattice
+   with the interior bond-length spread of the mesh (:func:`rev_for_spread`).
+
+On a sample, the three unit strains are applied with periodic fluctuations that bring
+every node into equilibrium (one factorisation, three solves per ``nu_m``): the mean
+stress gives ``nu_eff(nu_m)`` and ``E_eff(nu_m)`` at ``k_n = 1``
+(:func:`relaxed_moduli`). A root find on ``nu_eff(nu_m) = nu`` gives ``nu_m``, then
+``k_n = E / E_eff(nu_m)``. The couplings are stabilised per triangle
+(:mod:`dvstatic.lattice.stabilise`), on the sample and on the mesh alike.
 """
 
 from __future__ import annotations
 
+import logging
 import time
+from collections.abc import Callable
 
 import numpy as np
 
@@ -19,36 +32,54 @@ from ..._cache import Bounded
 from ...errors import CalibrationError
 from ...linalg import ConstrainedSystem, DirectSolver
 from ...material import to_mandel
-from ...mesh import Mesh, mesh_dof_order, periodic_square
+from ...mesh import Mesh, mesh_dof_order, periodic_sample, periodic_square
+from ...mesh.recipe import Sampling
 from .. import geometry as _geometry
 from ..operator import LatticeOperator, scatter_bond_forces, virial_sum
+from ..stabilise import clip_coupling, triangle_modes
 from ..weights import bond_weights
+from . import table
 from .base import MicroParameters
-from .paper import paper
 
 __all__ = [
     "REV_POINTS",
     "SPREAD_STEP",
+    "NU_M_LIMIT",
     "interior_spread",
     "rev_for_spread",
+    "sample_for",
     "relaxed_moduli",
     "relaxed",
+    "moduli_curve",
 ]
 
-#: points of the periodic sample used by the relaxed calibration
-REV_POINTS = 20_000
-#: resolution of the bond-length spread used to match samples
+log = logging.getLogger(__name__)
+
+#: points of the periodic samples made on the fly
+REV_POINTS = 10_000
+#: resolution of the bond-length spread used to match samples (meshes without recipe)
 SPREAD_STEP = 0.005
-#: periodic samples (a few; each holds a 20,000-point mesh)
+#: the root find searches nu_m in [-NU_M_LIMIT, NU_M_LIMIT]
+NU_M_LIMIT = 3.0
+#: typical d nu_eff / d nu_m (first secant step)
+_SLOPE = 0.6
+#: periodic samples (a few; each holds a mesh of REV_POINTS points)
 _SAMPLES = Bounded("calibration samples", maxsize=8)
-#: relaxed calibrations by (model, bonds, spread, nu, sample size, seed)
+#: relaxed calibrations by (model, bonds, sample key, nu, sample size, seed)
 _RESULTS = Bounded("relaxed calibrations", maxsize=256)
+#: moduli curves measured on samples (their evaluations are kept)
+_CURVES = Bounded("calibration sample curves", maxsize=16)
+#: per-triangle coupling modes of the samples (springs of unit stiffness)
+_MODES = Bounded("calibration sample modes", maxsize=16)
 
 _PROBES = (
     np.array([[1.0, 0.0], [0.0, 0.0]]),
     np.array([[0.0, 0.0], [0.0, 1.0]]),
     np.array([[0.0, 1.0], [1.0, 0.0]]) / np.sqrt(2.0),
 )
+
+#: interior bonds of a periodic sample are full bonds: "surface" is "uniform" there
+_SAMPLE_BONDS = {"surface": "uniform", "uniform": "uniform", "voronoi": "voronoi"}
 
 
 def interior_spread(mesh: Mesh) -> float:
@@ -71,21 +102,21 @@ def rev_for_spread(sigma_l: float, n_points: int = REV_POINTS, seed: int = 0) ->
     raise sigma_L), the amplitude found by bisection; a random periodic point set when
     the spread exceeds what moves can reach.
     """
-    key = (round(sigma_l, 4), n_points, seed)
+    key = ("spread", round(sigma_l, 4), n_points, seed)
     best = _SAMPLES.get(key)
     if best is not None:
         return best
-    lat = periodic_square(n_points, kind="lattice", seed=seed)
+    lat = periodic_sample(Sampling("lattice"), n_points, seed)
     best = lat
     if sigma_l > lat.edge_length_spread() + 1e-3:
         rnd = periodic_square(n_points, kind="random", seed=seed)
         if sigma_l >= rnd.edge_length_spread():
             best = rnd
         else:
-            lo, hi = 0.0, 0.9 * lat.h
+            lo, hi = 0.0, 0.9
             for _ in range(30):
                 amp = 0.5 * (lo + hi)
-                m = lat.perturbed(amp, seed=seed)
+                m = periodic_sample(Sampling("lattice", perturbations=(amp,)), n_points, seed)
                 s = m.edge_length_spread()
                 best = m
                 if abs(s / sigma_l - 1) < 0.01:
@@ -95,22 +126,70 @@ def rev_for_spread(sigma_l: float, n_points: int = REV_POINTS, seed: int = 0) ->
     return best
 
 
-def relaxed_moduli(kind: str, rev: Mesh, nu_m: float, bonds: str = "uniform") -> dict:
+def sample_for(mesh: Mesh, n_points: int = REV_POINTS, seed: int = 0, spread=None):
+    """The periodic sample of ``mesh``'s micro-structure and how it was made.
+
+    Returns
+    -------
+    sample : Mesh
+    source : str
+        ``"recipe"`` (made by the mesh's generator recipe) or ``"spread"`` (a perturbed
+        lattice with the mesh's interior bond-length spread).
+    key : tuple
+        What identifies the sample (for caches).
+    """
+    s = mesh.sampling
+    if s is not None and s.reproducible:
+        key = ("recipe", s.key, n_points, seed)
+        rev = _SAMPLES.get(key)
+        if rev is None:
+            rev = periodic_sample(s, n_points, seed)
+            _SAMPLES.put(key, rev)
+        return rev, "recipe", key
+    raw = interior_spread(mesh) if spread is None else float(spread)
+    # quantised to 0.005 (nu_eff moves by < 1e-3): meshes of the same statistics share
+    sig = round(raw / SPREAD_STEP) * SPREAD_STEP
+    return rev_for_spread(sig, n_points, seed), "spread", ("spread", round(sig, 4), n_points, seed)
+
+
+def relaxed_moduli(
+    kind: str, rev: Mesh, nu_m: float, bonds: str = "surface", stabilise: bool = True
+) -> dict:
     """Equilibrium (relaxed) moduli of a periodic sample for ``k_n = 1`` and ``nu_m``.
 
     For each unit macroscopic strain the periodic fluctuation that brings every node
     into equilibrium is solved for; the mean stress gives the effective tensor, whose
     isotropic part gives E and nu.
 
+    Parameters
+    ----------
+    kind : {"DV", "RV"}
+    rev : Mesh
+        A periodic sample.
+    nu_m : float
+    bonds : {"surface", "uniform", "voronoi"}
+    stabilise : bool
+        Clip the coupling per triangle (:mod:`dvstatic.lattice.stabilise`).
+
     Returns
     -------
     dict
         ``C`` (3x3 Mandel), ``E``, ``nu`` (for k_n = 1), ``stable`` (False if the
-        sample's stiffness is not positive definite), ``seconds``.
+        sample's stiffness is not positive definite), ``clipped`` (fraction of
+        triangles whose coupling was reduced), ``seconds``.
     """
     t0 = time.perf_counter()
     geom = _geometry.of(rev)
-    op = LatticeOperator(rev, bond_weights(bonds, geom), float(nu_m), barycentric=kind == "DV")
+    spring = bond_weights(_SAMPLE_BONDS[bonds], rev)
+    coupling = np.full(rev.n_triangles, float(nu_m))
+    if stabilise:
+        key = (id(rev), kind, bonds)
+        modes = _MODES.get(key)
+        if modes is None or modes[0] is not rev:
+            modes = (rev, triangle_modes(rev, spring, kind == "DV"))
+            _MODES.put(key, modes)
+        coupling = clip_coupling(modes[1], coupling)
+    op = LatticeOperator(rev, spring, coupling, barycentric=kind == "DV")
     # the fluctuation is periodic: pin one node against the two translations
     system = ConstrainedSystem(op.stiffness_bsr, np.array([0, 1]))
     lu = DirectSolver(system.A, order=mesh_dof_order(rev))
@@ -123,17 +202,20 @@ def relaxed_moduli(kind: str, rev: Mesh, nu_m: float, bonds: str = "uniform") ->
         x, _ = lu.solve(system.rhs(-f, np.zeros(2)))
         t = op.linear_tension(u_aff + x.reshape(-1, 2), strain=eps)
         cols.append(to_mandel(virial_sum(t, bonds_ref) / rev.area))
-    C = np.stack(cols, axis=1)
+    return {
+        **isotropic_part(np.stack(cols, axis=1)),
+        "stable": lu.negative_pivots == 0,
+        "clipped": float(np.mean(coupling != nu_m)),
+        "seconds": time.perf_counter() - t0,
+    }
+
+
+def isotropic_part(C: np.ndarray) -> dict:
+    """E and nu of the isotropic part of a 3x3 Mandel stiffness (plane), and C."""
     C = 0.5 * (C + C.T)
     k2 = 0.25 * (C[0, 0] + C[1, 1] + 2 * C[0, 1])  # E / (2 (1 - nu))
     g = 0.25 * (0.5 * (C[0, 0] + C[1, 1]) - C[0, 1] + C[2, 2])  # E / (2 (1 + nu))
-    return {
-        "C": C,
-        "E": 4 * k2 * g / (k2 + g),
-        "nu": (k2 - g) / (k2 + g),
-        "stable": lu.negative_pivots == 0,
-        "seconds": time.perf_counter() - t0,
-    }
+    return {"C": C, "E": 4 * k2 * g / (k2 + g), "nu": (k2 - g) / (k2 + g)}
 
 
 def relaxed(
@@ -141,141 +223,177 @@ def relaxed(
     mesh: Mesh,
     E: float,
     nu: float,
-    bonds: str = "uniform",
+    bonds: str = "surface",
     rev_points: int = REV_POINTS,
     seed: int = 0,
     spread: float | None = None,
 ) -> MicroParameters:
     """Micro-parameters for which the *relaxed* lattice matches E and nu.
 
-    A periodic sample with the interior bond-length spread of ``mesh``
-    (:func:`rev_for_spread`) is probed with three unit strains (:func:`relaxed_moduli`);
-    a secant root find on ``nu_eff(nu_m) = nu``, started from the paper's ``nu_m``,
-    gives ``nu_m``; then ``k_n = E / E_eff(nu_m)``. Typically 3-6 evaluations. Results
-    are cached per (model, bonds, spread, nu). ``spread`` overrides the interior
-    sigma_L of ``mesh`` (the distributed solver computes it across ranks).
+    Parameters
+    ----------
+    kind : {"DV", "RV"}
+    mesh : Mesh
+    E, nu : float
+        In-plane constants to match (plane strain: the effective ones).
+    bonds : {"surface", "uniform", "voronoi"}
+    rev_points, seed : int
+        Size and seed of a sample made on the fly.
+    spread : float, optional
+        Overrides the interior sigma_L of a mesh without recipe (the distributed
+        solver computes it across ranks).
+
+    Returns
+    -------
+    MicroParameters
+        ``stabilised=True``; ``details["source"]`` is ``"table"``, ``"recipe"`` or
+        ``"spread"``, ``details["seconds"]`` the time it took (0 for a cached result).
 
     Raises
     ------
     CalibrationError
-        If nu cannot be reached with a stable sample (the message gives the range of
-        nu_eff found).
+        If nu lies outside the range of nu_eff that the lattice reaches (the message
+        gives the range).
     """
-    # the spread is quantised to 0.005 (nu_eff moves by < 1e-3): meshes of the same
-    # statistics share one calibration
-    raw = interior_spread(mesh) if spread is None else float(spread)
-    sig = round(raw / SPREAD_STEP) * SPREAD_STEP
-    key = (kind, bonds, round(sig, 4), round(float(nu), 12), rev_points, seed)
+    t0 = time.perf_counter()
+    curve, ckey = moduli_curve(kind, mesh, bonds, rev_points, seed, spread)
+    key = (ckey, round(float(nu), 12))
     hit = _RESULTS.get(key)
     if hit is None:
-        rev = rev_for_spread(sig, rev_points, seed)
-        search = _NuSearch(kind, rev, bonds, nu, sig, (rev_points, seed))
-        start = paper(kind, rev, _geometry.of(rev), 1.0, nu, bond_weights(bonds, _geometry.of(rev)))
-        x = search.solve(start.nu_m)
-        hit = (x, search.evals[x]["E"], search.details(x, start.nu_m))
+        nu_m, e_eff, details = _solve_nu(curve, float(nu), kind, mesh)
+        hit = (nu_m, e_eff, {**details, "seconds": time.perf_counter() - t0})
         _RESULTS.put(key, hit)
+    else:
+        hit = (hit[0], hit[1], {**hit[2], "seconds": 0.0, "cached": True})
     nu_m, e_eff, details = hit
-    return MicroParameters(E / e_eff, nu_m, "relaxed", None, details["nu_range"], dict(details))
+    log.debug(
+        "relaxed %s calibration (%s): nu_m %.5f, k_n/E %.5f in %.3f s",
+        kind,
+        details["source"],
+        nu_m,
+        1 / e_eff,
+        details["seconds"],
+    )
+    return MicroParameters(
+        E / e_eff, nu_m, "relaxed", None, details["nu_range"], details, stabilised=True
+    )
 
 
-class _NuSearch:
-    """Root find of ``nu_eff(nu_m) = nu`` on a sample; unstable samples are walls."""
+def moduli_curve(
+    kind: str,
+    mesh: Mesh,
+    bonds: str = "surface",
+    rev_points: int = REV_POINTS,
+    seed: int = 0,
+    spread: float | None = None,
+):
+    """The relaxed ``(nu_eff, E_eff)(nu_m)`` of ``mesh``'s micro-structure: the table's
+    curve, or one measured on a sample (each value once, kept for later calibrations).
 
-    def __init__(self, kind: str, rev: Mesh, bonds: str, nu: float, sig: float, request):
-        self.kind, self.rev, self.bonds, self.nu, self.sig = kind, rev, bonds, nu, sig
-        self.request = request  # (points asked for, seed): the sample's cache key
+    Returns
+    -------
+    curve : callable
+        ``curve(nu_m) -> (nu_eff, E_eff)``, with ``describe()``.
+    key : tuple
+        Identifies the curve.
+    """
+    if _SAMPLE_BONDS[bonds] == "uniform" and mesh.sampling is not None:
+        c = table.curve(kind, mesh.sampling)
+        if c is not None:
+            return c, (kind, "table", mesh.sampling.key)
+    rev, source, skey = sample_for(mesh, rev_points, seed, spread)
+    key = (kind, _SAMPLE_BONDS[bonds], skey)
+    c = _CURVES.get(key)
+    if c is None or c.rev is not rev:
+        c = _SampleCurve(kind, rev, bonds, source)
+        _CURVES.put(key, c)
+    return c, key
+
+
+class _SampleCurve:
+    """``nu_eff(nu_m)`` and ``E_eff(nu_m)`` measured on a sample (each value once)."""
+
+    def __init__(self, kind: str, rev: Mesh, bonds: str, source: str):
+        self.kind, self.rev, self.bonds, self.source = kind, rev, bonds, source
         self.evals: dict[float, dict] = {}
 
-    def g(self, x) -> float:
-        """``nu_eff(x) - nu``, NaN where the sample is unstable."""
-        x = float(x)
+    def __call__(self, nu_m: float) -> tuple[float, float]:
+        x = float(nu_m)
         if x not in self.evals:
             self.evals[x] = relaxed_moduli(self.kind, self.rev, x, self.bonds)
         r = self.evals[x]
-        return r["nu"] - self.nu if r["stable"] else np.nan
+        return float(r["nu"]), float(r["E"])
 
-    def fail(self, reason: str):
-        ok = [r["nu"] for r in self.evals.values() if r["stable"]]
-        span = f"[{min(ok):.3f}, {max(ok):.3f}]" if ok else "none (every sample unstable)"
+    def guess(self, nu: float) -> float:
+        """The paper's closed-form nu_m on the sample (0 where it has none)."""
+        from .paper import paper
+
+        try:
+            w = bond_weights(_SAMPLE_BONDS[self.bonds], self.rev)
+            return paper(self.kind, self.rev, _geometry.of(self.rev), 1.0, nu, w).nu_m
+        except CalibrationError:
+            return 0.0
+
+    def describe(self) -> dict:
+        return {
+            "source": self.source,
+            "sample": str(self.rev.sampling) if self.rev.sampling else "perturbed lattice",
+            "sample_points": self.rev.n_points,
+            "sigma_L_sample": self.rev.edge_length_spread(),
+            "evaluations": len(self.evals),
+            "factorisations": len(self.evals),
+        }
+
+
+def _solve_nu(curve: Callable, nu: float, kind: str, mesh: Mesh) -> tuple[float, float, dict]:
+    """The root of ``nu_eff(nu_m) = nu``: secant steps from the curve's first guess
+    until the root is bracketed, then Brent's method. nu_eff grows with nu_m (and
+    saturates where every triangle's coupling is clipped)."""
+    from scipy.optimize import brentq
+
+    def g(x):
+        return curve(x)[0] - nu
+
+    x0 = float(np.clip(curve.guess(nu), -NU_M_LIMIT, NU_M_LIMIT))
+    g0 = g(x0)
+    seen = [g0 + nu]
+    step = -g0 / _SLOPE
+    step = step if abs(step) > 0.005 else 0.005 * np.sign(step or 1.0)
+    x1 = float(np.clip(x0 + step, -NU_M_LIMIT, NU_M_LIMIT))
+    root = x0 if abs(g0) < 1e-9 else None
+    for _ in range(30):
+        if root is not None or x1 == x0:
+            break
+        g1 = g(x1)
+        seen.append(g1 + nu)
+        if g1 == 0 or np.sign(g1) != np.sign(g0):
+            a, b = sorted((x0, x1))
+            root = x1 if g1 == 0 else float(brentq(g, a, b, xtol=1e-6, rtol=1e-9, maxiter=50))
+            break
+        if abs(g1 - g0) < 1e-7 or abs(g1) >= abs(g0) and abs(x1) >= NU_M_LIMIT:
+            break  # saturated (every coupling clipped) or at the end of the search
+        slope = (g1 - g0) / (x1 - x0)
+        step = -g1 / slope if slope > 0 else np.sign(-g1) * 2 * abs(x1 - x0)
+        step = float(np.clip(step, -4 * abs(x1 - x0), 4 * abs(x1 - x0)))
+        step = step if abs(step) > 0.01 else 0.01 * np.sign(-g1)
+        x0, g0, x1 = x1, g1, float(np.clip(x1 + 1.2 * step, -NU_M_LIMIT, NU_M_LIMIT))
+    if root is None:
+        where = "this mesh" if mesh.sampling is None else f"a {mesh.sampling} mesh"
+        span = getattr(curve, "nu_range", None)
+        if span is not None:
+            reach = f"its nu_eff lies in [{span[0]:.3f}, {span[1]:.3f}]"
+        elif nu > max(seen):
+            reach = f"its nu_eff saturates at {max(seen):.3f}"
+        else:
+            reach = f"its nu_eff saturates at {min(seen):.3f}"
         raise CalibrationError(
-            f"nu = {self.nu} has no relaxed {self.kind} calibration for a mesh of sigma_L = "
-            f"{self.sig:.3f}: {reason}; stable samples reached nu_eff in {span} "
-            f"({len(self.evals)} evaluations)",
+            f"nu = {nu} cannot be reached by the relaxed {kind} lattice of {where}: {reach}"
+            " (plane strain: the in-plane nu / (1 - nu) must lie there)",
             "nu",
         )
-
-    def stable_start(self, start: float) -> tuple[float, float]:
-        """The paper's ``nu_m``, or the nearest stable value towards 0 (the plain spring
-        network is always stable)."""
-        g0 = self.g(start)
-        if np.isfinite(g0):
-            return start, g0
-        x0 = start
-        lo, hi = (start, 0.0) if start < 0 else (0.0, start)
-        for _ in range(12):
-            mid = 0.5 * (lo + hi)
-            if np.isfinite(self.g(mid)):
-                x0, g0 = mid, self.g(mid)
-                lo, hi = (lo, mid) if start < 0 else (mid, hi)
-            else:
-                lo, hi = (mid, hi) if start < 0 else (lo, mid)
-        if not np.isfinite(g0):
-            return 0.0, self.g(0.0)
-        return x0, g0
-
-    def approach_wall(self, x1: float, g1: float, x2: float) -> tuple[float, float]:
-        """A stability wall lies between x1 (stable) and x2: bisect towards it; the root
-        may lie before it."""
-        stable_x, wall_x = x1, x2
-        for _ in range(8):
-            xm = 0.5 * (stable_x + wall_x)
-            gm = self.g(xm)
-            if not np.isfinite(gm):
-                wall_x = xm
-            elif np.sign(gm) != np.sign(g1):
-                return xm, gm
-            else:
-                stable_x = xm
-        self.fail("it would need nu_m beyond the stability limit of the sample")
-        raise AssertionError  # pragma: no cover - fail() raises
-
-    def solve(self, start: float) -> float:
-        """The root, bracketed by steps that double, then refined by Brent's method."""
-        from scipy.optimize import brentq
-
-        x1, g1 = self.stable_start(start)
-        step = 0.05 * (1.0 + abs(x1))
-        direction = 1.0 if g1 < 0 else -1.0
-        for _ in range(10):
-            if abs(g1) < 1e-5:
-                break
-            x2 = x1 + direction * step
-            g2 = self.g(x2)
-            if not np.isfinite(g2):
-                x2, g2 = self.approach_wall(x1, g1, x2)
-            if np.sign(g2) != np.sign(g1):
-                a_, b_ = sorted((x1, x2))
-                x1 = float(brentq(self.g, a_, b_, xtol=1e-6, rtol=1e-9, maxiter=30))
-                g1 = self.g(x1)
-                break
-            x1, g1 = x2, g2
-            step *= 2.0
-        if not (np.isfinite(g1) and abs(g1) < 1e-4):
-            self.fail("no nu_m found")
-        return float(x1)
-
-    def details(self, x: float, start: float) -> dict:
-        ok = [e["nu"] for e in self.evals.values() if e["stable"]]
-        return {
-            "sigma_L_mesh": self.sig,
-            "sigma_L_sample": self.rev.edge_length_spread(),
-            "sample_points": self.rev.n_points,
-            "sample_request": self.request,
-            "evaluations": len(self.evals),
-            "solves": 3 * len(self.evals),
-            "factorisations": len(self.evals),
-            "seconds": float(sum(e["seconds"] for e in self.evals.values())),
-            "E_eff_per_k_n": self.evals[x]["E"],
-            "nu_range": (min(ok), max(ok)),
-            "paper_nu_m": start,
-        }
+    nu_eff, e_eff = curve(root)
+    info = curve.describe()
+    info.update(
+        nu_range=getattr(curve, "nu_range", (np.nan, np.nan)), nu_eff=nu_eff, E_eff_per_k_n=e_eff
+    )
+    return root, e_eff, info

@@ -1,0 +1,139 @@
+"""Make the relaxed-calibration table of the built-in generators' micro-structures.
+
+For DV and RV and each recipe (regular lattice, jittered lattices at jitters 0.05 ...
+0.45, random points, CVT with the generators' Lloyd iterations), the relaxed moduli
+``nu_eff`` and ``E_eff`` (at k_n = 1, stabilised coupling) are measured on periodic
+samples made by the recipe (``dv.mesh.periodic_sample``), averaged over seeds, on a
+grid of nu_m. The full run writes the package's table
+``dvstatic/lattice/calibration/relaxed_table.json`` (about 30 min on 2 cores); the
+quick run writes a small table to ``validation/out/relaxed_table_quick.json`` and never
+touches the package's.
+
+    python validation/calibration_table.py            # full size, both cores
+    python validation/calibration_table.py --quick    # seconds, smoke test
+"""
+
+from __future__ import annotations
+
+import multiprocessing as mp
+import time
+from pathlib import Path
+
+import numpy as np
+from _common import parser, write_json
+
+PACKAGE_TABLE = (
+    Path(__file__).resolve().parents[1]
+    / "dvstatic"
+    / "lattice"
+    / "calibration"
+    / "relaxed_table.json"
+)
+JITTERS = (0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.45)
+NU_M = np.round(np.arange(-1.6, 1.6 + 1e-9, 0.05), 4)
+
+
+def _task(args):
+    """(model, recipe fields, points, seeds) -> nu_eff and E_eff over NU_M (seed means)
+    and their spread over seeds."""
+    import dvstatic as dv
+    from dvstatic.lattice.calibration import relaxed_moduli
+
+    model, fields, n_points, seeds, nu_m = args
+    sampling = dv.mesh.Sampling(**fields)
+    t0 = time.perf_counter()
+    nus, Es = [], []
+    for seed in seeds:
+        rev = dv.mesh.periodic_sample(sampling, n_points, seed)
+        res = [relaxed_moduli(model, rev, float(x)) for x in nu_m]
+        nus.append([r["nu"] for r in res])
+        Es.append([r["E"] for r in res])
+        if not all(r["stable"] for r in res):
+            raise RuntimeError(f"{model} {sampling}: a stabilised sample is unstable")
+    nus, Es = np.array(nus), np.array(Es)
+    return {
+        "model": model,
+        "recipe": fields,
+        "nu": nus.mean(axis=0),
+        "E": Es.mean(axis=0),
+        "nu_seed_spread": float(np.max(np.ptp(nus, axis=0))) if len(seeds) > 1 else 0.0,
+        "E_seed_spread": float(np.max(np.ptp(Es, axis=0) / Es.mean(axis=0)))
+        if len(seeds) > 1
+        else 0.0,
+        "seconds": time.perf_counter() - t0,
+    }
+
+
+def main() -> None:
+    p = parser(__doc__)
+    p.add_argument("--points", type=int, default=20_000, help="points per sample")
+    p.add_argument("--seeds", type=int, default=2, help="samples per recipe")
+    p.add_argument("--processes", type=int, default=2)
+    a = p.parse_args()
+    from dvstatic.lattice.stabilise import MARGIN
+    from dvstatic.mesh.generators import CVT_ITERATIONS
+
+    jitters, nu_m, points, seeds = JITTERS, NU_M, a.points, list(range(a.seeds))
+    if a.quick:
+        jitters, nu_m, points, seeds = (0.0, 0.3), np.round(np.arange(-1.6, 1.61, 0.4), 4), 800, [0]
+    recipes = [{"kind": "jittered", "jitter": j} for j in jitters[1:]]
+    recipes += [
+        {"kind": "lattice"},
+        {"kind": "random"},
+        {"kind": "cvt", "iterations": CVT_ITERATIONS},
+    ]
+    tasks = [(m, r, points, seeds, nu_m) for m in ("DV", "RV") for r in recipes]
+    t0 = time.perf_counter()
+    with mp.get_context("spawn").Pool(a.processes) as pool:
+        results = []
+        for res in pool.imap_unordered(_task, tasks):
+            results.append(res)
+            print(
+                f"{res['model']} {res['recipe']}: nu_eff in [{res['nu'].min():.3f}, "
+                f"{res['nu'].max():.3f}], seed spread nu {res['nu_seed_spread']:.1e} "
+                f"E {res['E_seed_spread']:.1e}, {res['seconds']:.0f} s",
+                flush=True,
+            )
+    curves: dict = {"DV": {}, "RV": {}}
+    for res in results:
+        curves[res["model"]][res["recipe"]["kind"]] = res
+    table = {
+        "format": 1,
+        "made_by": "validation/calibration_table.py" + (" --quick" if a.quick else ""),
+        "margin": MARGIN,
+        "cvt_iterations": CVT_ITERATIONS,
+        "sample_points": points,
+        "seeds": seeds,
+        "nu_m": nu_m,
+        "curves": {},
+        "seed_spread": {},
+        "seconds": time.perf_counter() - t0,
+    }
+    for model, c in curves.items():
+        by_jitter = {0.0: c["lattice"]} | {
+            r["recipe"]["jitter"]: r
+            for r in results
+            if r["model"] == model and r["recipe"]["kind"] == "jittered"
+        }
+        grid = sorted(by_jitter)
+        table["curves"][model] = {
+            "lattice": {"nu": c["lattice"]["nu"], "E": c["lattice"]["E"]},
+            "jittered": {
+                "jitter": grid,
+                "nu": [by_jitter[j]["nu"] for j in grid],
+                "E": [by_jitter[j]["E"] for j in grid],
+            },
+            "random": {"nu": c["random"]["nu"], "E": c["random"]["E"]},
+            "cvt": {"nu": c["cvt"]["nu"], "E": c["cvt"]["E"]},
+        }
+        table["seed_spread"][model] = {
+            "nu": max(r["nu_seed_spread"] for r in results if r["model"] == model),
+            "E": max(r["E_seed_spread"] for r in results if r["model"] == model),
+        }
+    path = a.out / "relaxed_table_quick.json" if a.quick else PACKAGE_TABLE
+    write_json(table, path)
+    print(f"wrote {path} in {table['seconds']:.0f} s")
+
+
+if __name__ == "__main__":
+    main()
