@@ -235,7 +235,10 @@ def _print_summary(sc, d: dict, written: list[Path]) -> None:
     if "strain_energy" in d:
         rows.append(("energy", f"{d['strain_energy']:.6e}"))
     for key, r in d["reactions"].items():
-        rows.append((f"reaction {key}", f"({r[0]:.6g}, {r[1]:.6g})"))
+        if key == "total":
+            rows.append(("reaction total", f"(Rx, Ry) = ({r[0]:.6g}, {r[1]:.6g})"))
+        else:  # the components the support prescribes
+            rows.append((f"reaction {key}", ", ".join(f"R{c} = {v:.6g}" for c, v in r.items())))
     if "fe" in d:
         f = d["fe"]
         rows.append(
@@ -266,9 +269,9 @@ def _print_summary(sc, d: dict, written: list[Path]) -> None:
                     )
                 )
     for name, rec in d.get("part_stress", {}).items():
-        lat, ls = rec["lattice"], rec["lattice_strain"]
+        lat, lv = rec["lattice"], rec["lattice_virial"]
         txt = (
-            f"max sxx {lat['max_sxx']:.4g} (virial), {ls['max_sxx']:.4g} (strain), "
+            f"max sxx {lat['max_sxx']:.4g} ({lv['max_sxx']:.4g} virial), "
             f"max syy {lat['max_syy']:.4g}, max principal {lat['max_principal']:.4g}"
         )
         if "fe" in rec:

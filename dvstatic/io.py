@@ -21,7 +21,6 @@ from .errors import InputError
 from .fem import compare
 from .mesh import Mesh
 from .mesh.locate import interpolate
-from .problem import select_nodes
 
 log = logging.getLogger(__name__)
 
@@ -116,6 +115,12 @@ def read_mesh(path: str | Path) -> Mesh:
     return mesh
 
 
+def _szz(solution, s: np.ndarray) -> np.ndarray:
+    from .lattice.stress import out_of_plane_stress
+
+    return out_of_plane_stress(solution.model, s)
+
+
 def _surface_regions(m, phys, surfaces: dict[int, str]) -> dict[str, np.ndarray]:
     """Triangle indices (in the order the triangle blocks are stacked) of every physical
     surface group."""
@@ -134,9 +139,9 @@ def _surface_regions(m, phys, surfaces: dict[int, str]) -> dict[str, np.ndarray]
     return {k: np.concatenate(v) for k, v in out.items()}
 
 
-def nodal_field(solution, name: str, stress: str = "virial") -> np.ndarray:
+def nodal_field(solution, name: str, stress: str | None = None) -> np.ndarray:
     """A nodal scalar field of a solution by name (see :data:`FIELDS`); stress fields
-    use the recovery ``stress`` ("virial" or "strain", see ``Solution.stress``)."""
+    use the recovery ``stress`` (see ``Solution.stress``; None: its default)."""
     if name not in FIELDS:
         raise InputError(f"unknown field {name!r}; accepted: {', '.join(FIELDS)}", "field")
     u = solution.u
@@ -162,10 +167,11 @@ def write_vtu(path: str | Path, solution, stress: bool = True) -> Path:
     """Write a solution as VTU (ParaView), atomically.
 
     Content: 3-D points (z = 0); cells: the triangles and the bonds (as lines);
-    point data ``displacement`` (N, 3) and, with ``stress``, ``stress`` (N, 9, the
-    virial stress per Voronoi cell as a 3x3 tensor) and ``stress_from_strain`` (N, 9,
-    the strain-based recovery, better at free surfaces); cell data ``tension`` (bond
-    tension on line cells, 0 on triangles) and ``area`` (triangle area, 0 on lines).
+    point data ``displacement`` (N, 3) and, with ``stress``, ``stress`` (N, 9: the
+    default recovery of :meth:`Solution.stress` as a 3x3 tensor, ``szz`` included in
+    plane strain) and ``stress_virial`` (N, 9, the lattice's force-based stress per
+    Voronoi cell); cell data ``tension`` (bond tension on line cells, 0 on triangles)
+    and ``area`` (triangle area, 0 on lines).
     """
     import meshio
 
@@ -175,13 +181,12 @@ def write_vtu(path: str | Path, solution, stress: bool = True) -> Path:
     bonds = mesh.topology.bonds
     point_data = {"displacement": np.c_[solution.u, np.zeros(mesh.n_points)]}
     if stress:
-        s = solution.stress()
-        t9 = np.zeros((mesh.n_points, 9))
-        t9[:, [0, 1, 3, 4]] = s.reshape(-1, 4)
-        point_data["stress"] = t9
-        t9s = np.zeros((mesh.n_points, 9))
-        t9s[:, [0, 1, 3, 4]] = solution.stress("strain").reshape(-1, 4)
-        point_data["stress_from_strain"] = t9s
+        for key, method in (("stress", None), ("stress_virial", "virial")):
+            s = solution.stress(method)
+            t9 = np.zeros((mesh.n_points, 9))
+            t9[:, [0, 1, 3, 4]] = s.reshape(-1, 4)
+            t9[:, 8] = _szz(solution, s)
+            point_data[key] = t9
     tension = solution.tension()
     cell_data = {
         "tension": [np.zeros(mesh.n_triangles), tension],
@@ -211,9 +216,10 @@ def summary(solution, fe=None, probes=None, part_stress=()) -> dict:
         Points where displacement and stress (lattice and FE) are reported.
     part_stress : sequence of str
         Boundary parts whose nodal stress extremes are reported (max/min of sxx,
-        syy and of the largest principal stress over the part's nodes): the lattice
-        virial stress (``lattice``), the strain-based recovery (``lattice_strain``,
-        better at free surfaces) and, with ``fe``, the FE stress at the same nodes.
+        syy and of the largest principal stress over the part's nodes): the default
+        recovery of :meth:`Solution.stress` (``lattice``), the virial stress
+        (``lattice_virial``, high at surfaces) and, with ``fe``, the FE stress at the same
+        nodes.
     """
     info = solution.info
     out = {
@@ -295,12 +301,25 @@ def _solver_summary(info) -> dict:
 
 
 def _reactions(solution) -> dict:
+    """The total reaction, and per support the reaction of each component it
+    prescribes (``{"x": ..., "y": ...}``); a node component prescribed by two supports
+    counts for the first one only, so the supports' reactions add up to the total."""
+    from .problem import support_components
+
     mesh = solution.model.mesh
-    out = {"total": solution.reactions.sum(axis=0).tolist()}
+    out: dict = {"total": solution.reactions.sum(axis=0).tolist()}
+    taken = np.zeros((mesh.n_points, 2), dtype=bool)
+    names: dict[int, str] = {}
     for i, s in enumerate(solution.supports):
-        nodes = select_nodes(mesh, s.where, "Fix")
-        key = s.where if isinstance(s.where, str) else f"support{i}"
-        out[key] = solution.reactions[nodes].sum(axis=0).tolist()
+        names[id(s)] = s.where if isinstance(s.where, str) else f"support{i}"
+    for s in solution.supports:
+        rec = out.setdefault(names[id(s)], {})
+        for c in support_components(mesh, [s]):
+            nodes = c.nodes[~taken[c.nodes, c.component]]
+            taken[nodes, c.component] = True
+            rec["xy"[c.component]] = rec.get("xy"[c.component], 0.0) + float(
+                solution.reactions[nodes, c.component].sum()
+            )
     return out
 
 
@@ -319,14 +338,14 @@ def _probes(solution, stress: np.ndarray, p: np.ndarray, fe) -> dict:
 
 def _part_stress(solution, stress: np.ndarray, names, fe) -> dict:
     mesh = solution.model.mesh
-    strain_s = solution.stress("strain")
+    virial = solution.stress("virial")
     out = {}
     for name in names:
         nodes = mesh.part_nodes(name)
         rec = {
             "nodes": int(nodes.size),
             "lattice": _stress_extremes(stress[nodes]),
-            "lattice_strain": _stress_extremes(strain_s[nodes]),
+            "lattice_virial": _stress_extremes(virial[nodes]),
         }
         if fe is not None:
             rec["fe"] = _stress_extremes(fe.stress(mesh.points[nodes]))
@@ -382,7 +401,7 @@ def write_png(
     field: str = "|u|",
     scale: float | None = None,
     title: str | None = None,
-    stress: str = "virial",
+    stress: str | None = None,
 ) -> Path:
     """Picture of the deformed mesh coloured by a nodal field, atomically.
 

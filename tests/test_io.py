@@ -147,10 +147,25 @@ def test_summary_json_and_png(solution, tmp_path):
     ):
         assert key in d
     assert d["mesh"]["sigma_L"] == pytest.approx(solution.model.mesh.edge_length_spread())
-    assert d["reactions"]["left"][0] == pytest.approx(1.0, rel=1e-9)
+    assert d["reactions"]["left"]["x"] == pytest.approx(1.0, rel=1e-9)
+
     path = io.write_json(tmp_path / "s.json", d)
     assert json.loads(path.read_text())["model"]["type"] == "RV"
     png = io.write_png(tmp_path / "s.png", solution, field="von_mises")
     assert png.read_bytes()[:4] == b"\x89PNG"
     with pytest.raises(ValueError, match="unknown field"):
         io.write_png(tmp_path / "t.png", solution, field="temperature")
+
+
+def test_reactions_per_prescribed_component_without_double_counting(tmp_path):
+    """Rollers left (x) and bottom (y) share the corner node: each support reports only
+    the component it prescribes, and the components add up to the total (a defect of
+    0.1: bottom showed an x reaction and left + bottom x was 1.0192 for a total of 1)."""
+    mesh = dv.mesh.rectangle(1.0, 1.0, 0.1)
+    sup = [dv.Fix("left", x=0.0), dv.Fix("bottom", y=0.0), dv.Fix("left", x=0.0)]
+    sol = dv.solve(dv.RV(mesh, E_BEAM, NU), sup, [dv.Traction("right", (1.0, 0.2))])
+    r = io.summary(sol)["reactions"]
+    assert set(r["left"]) == {"x"} and set(r["bottom"]) == {"y"}
+    assert r["left"]["x"] == pytest.approx(r["total"][0], rel=1e-12)
+    assert r["bottom"]["y"] == pytest.approx(r["total"][1], rel=1e-12)
+    assert r["left"]["x"] == pytest.approx(-1.0, rel=1e-9)

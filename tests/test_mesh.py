@@ -92,3 +92,61 @@ def test_mesh_orients_triangles_ccw():
 def test_mesh_arrays_are_read_only(lattice_small):
     with pytest.raises(ValueError):
         lattice_small.points[0, 0] = 3.0
+
+
+def test_graded_mesh_follows_the_size_field():
+    """A size field h(x): boundary edges and cells follow it (a CVT mesh)."""
+
+    def h(x):
+        return 0.02 + 0.06 * x[:, 0]  # from 0.02 at x = 0 to 0.08 at x = 1
+
+    mesh = dv.mesh.rectangle(1.0, 1.0, h)
+    assert mesh.sampling.kind == "cvt"
+    for part in ("bottom", "top"):
+        e = mesh.part_edges(part)
+        mid = mesh.points[e].mean(axis=1)
+        length = np.hypot(*(mesh.points[e[:, 1]] - mesh.points[e[:, 0]]).T)
+        np.testing.assert_allclose(length, h(mid), rtol=0.15)
+    # node density ~ 1 / h^2: the left tenth holds many more nodes than the right one
+    x = mesh.points[:, 0]
+    left, right = np.sum(x < 0.1), np.sum(x > 0.9)
+    ratio = (h(np.array([[0.95, 0]])) / h(np.array([[0.05, 0]])))[0] ** 2
+    assert 0.6 * ratio < left / right < 1.4 * ratio
+    # the bonds follow it too (about h(x) everywhere, no sliver)
+    d = mesh.bond_vectors()
+    mid = mesh.points[mesh.topology.bonds].mean(axis=1)
+    rel = np.hypot(*d.T) / h(mid)
+    assert 0.6 < np.median(rel) < 1.3 and rel.max() < 2.5
+
+
+@pytest.mark.parametrize(
+    "h,match",
+    [
+        (lambda x: np.ones(3), "must return shape"),
+        (lambda x: -np.ones(len(x)), "finite and > 0"),
+        (lambda x: np.full(len(x), np.nan), "finite and > 0"),
+        (lambda x: np.full(len(x), 5.0), "larger than the domain"),
+    ],
+)
+def test_bad_size_field_is_refused(h, match):
+    with pytest.raises(ValueError, match=match):
+        dv.mesh.rectangle(1.0, 1.0, h)
+
+
+def test_size_near_a_hole():
+    domain = dv.domain.Domain(
+        dv.domain.Polygon([[0, 0], [2, 0], [2, 2], [0, 2]], ("b", "r", "t", "l")),
+        (dv.domain.Circle((1.0, 1.0), 0.2, "hole"),),
+    )
+    h = dv.mesh.size_near(domain, "hole", 0.02, 0.1, 0.5)
+    np.testing.assert_allclose(
+        h(np.array([[1.2, 1.0], [1.45, 1.0], [2.0, 2.0]])), [0.02, 0.06, 0.1]
+    )
+    mesh = dv.mesh.generate(domain, h)
+    e = mesh.part_edges("hole")
+    length = np.hypot(*(mesh.points[e[:, 1]] - mesh.points[e[:, 0]]).T)
+    assert abs(length.mean() / 0.02 - 1) < 0.1
+    with pytest.raises(ValueError, match="unknown part"):
+        dv.mesh.size_near(domain, "bore", 0.02, 0.1, 0.5)
+    with pytest.raises(ValueError, match="must not exceed"):
+        dv.mesh.size_near(domain, "hole", 0.2, 0.1, 0.5)

@@ -59,6 +59,9 @@ class Benchmark:
     keys: list[KeyValue] = field(default_factory=list)
     plane: str = "stress"
     fe_reference: Callable[[], object] | None = None
+    #: a boundary part whose tangential stress is compared with ``stress_exact``
+    stress_part: str | None = None
+    stress_exact: Callable[[np.ndarray], np.ndarray] | None = None  # (m, 2) -> (m, 2, 2)
 
     def h_for(self, nodes: int) -> float:
         """Spacing for about ``nodes`` nodes."""
@@ -187,6 +190,17 @@ def lame(nu: float = 0.3, E: float = 1e3, a: float = 1.0, b: float = 2.0, p: flo
         return [dv.Fix("left", x=0.0), dv.Fix("bottom", y=0.0)], [dv.Pressure("bore", p)]
 
     hoop = p * (b**2 + a**2) / (b**2 - a**2)
+
+    def stress(x):
+        r2 = np.sum(x**2, axis=1)
+        A, B = p * a**2 / (b**2 - a**2), p * a**2 * b**2 / (b**2 - a**2)
+        srr, stt = A - B / r2, A + B / r2
+        n = x / np.sqrt(r2)[:, None]
+        t = np.c_[-n[:, 1], n[:, 0]]
+        return srr[:, None, None] * np.einsum("mi,mj->mij", n, n) + stt[:, None, None] * (
+            np.einsum("mi,mj->mij", t, t)
+        )
+
     return Benchmark(
         f"Lame cylinder, plane strain (nu={nu:g})",
         E,
@@ -197,6 +211,8 @@ def lame(nu: float = 0.3, E: float = 1e3, a: float = 1.0, b: float = 2.0, p: flo
         exact=exact,
         keys=[KeyValue("hoop stress at the bore", (0.0, a), "sxx", hoop, "Lame (exact)")],
         plane="strain",
+        stress_part="bore",
+        stress_exact=stress,
     )
 
 
@@ -273,6 +289,14 @@ def kirsch(nu: float = 0.3, E: float = 1e3, a: float = 1.0, L: float = 4.0, S: f
         problem,
         exact=exact,
         keys=[KeyValue("sxx at the hole's top", (0.0, a), "sxx", 3.0 * S, "Kirsch (exact)")],
+        stress_part="hole",
+        stress_exact=lambda x: np.stack(
+            [
+                np.stack([stress(x)[0], stress(x)[2]], -1),
+                np.stack([stress(x)[2], stress(x)[1]], -1),
+            ],
+            -2,
+        ),
     )
 
 

@@ -72,6 +72,24 @@ def _key_values(bm, mesh, u, stress_at) -> dict:
     return out
 
 
+def _boundary_stress_error(bm, mesh, stress) -> float | None:
+    """Relative L2 error of the tangential stress over the nodes of ``bm.stress_part``
+    (corners included), against the exact stress."""
+    if bm.stress_part is None:
+        return None
+    e = mesh.part_edges(bm.stress_part)
+    nodes = np.unique(e)
+    d = np.zeros((mesh.n_points, 2))
+    for a, b in e:  # tangent at a node: the mean direction of its edges on the part
+        v = mesh.points[b] - mesh.points[a]
+        d[a] += v / np.hypot(*v)
+        d[b] += v / np.hypot(*v)
+    t = d[nodes] / np.hypot(*d[nodes].T)[:, None]
+    got = np.einsum("mi,mij,mj->m", t, stress[nodes], t)
+    ref = np.einsum("mi,mij,mj->m", t, bm.stress_exact(mesh.points[nodes]), t)
+    return float(np.linalg.norm(got - ref) / np.linalg.norm(ref))
+
+
 def _lattice(bm, mesh, sup, loads, cls_name, kw) -> dict:
     import dvstatic as dv
 
@@ -85,6 +103,7 @@ def _lattice(bm, mesh, sup, loads, cls_name, kw) -> dict:
         return {"failed": f"{type(exc).__name__}: {str(exc)[:160]}"}
     stress = sol.stress()
     rec = {
+        "boundary_stress_error": _boundary_stress_error(bm, mesh, stress),
         "u": sol.u,
         "calibration_seconds": float((model.micro.details or {}).get("seconds", 0.0)),
         "calibration_source": (model.micro.details or {}).get("source", model.micro.calibration),
@@ -102,6 +121,11 @@ def _fe(bm, mesh, sup, loads, order) -> dict:
 
     fe = dv.fem.solve(mesh, bm.E, bm.nu, sup, loads, order=order, plane=bm.plane)
     rec = {"u": fe.u, "solve_seconds": fe.info["seconds"]["total"]}
+    if bm.stress_part is not None:
+        nodes = mesh.part_nodes(bm.stress_part)
+        full = np.zeros((mesh.n_points, 2, 2))
+        full[nodes] = fe.stress(mesh.points[nodes])
+        rec["boundary_stress_error"] = _boundary_stress_error(bm, mesh, full)
     rec["keys"] = _key_values(bm, mesh, fe.u, lambda i, xy: fe.stress(np.array([xy]))[0])
     return rec
 
@@ -152,6 +176,8 @@ def _print_level(bm, level) -> None:
             cells.append(f"{name} --")
             continue
         s = f"{name} {100 * r['error']:.3g}%"
+        if r.get("boundary_stress_error") is not None:
+            s += f" [bnd stress {100 * r['boundary_stress_error']:.2g}%]"
         for k, v in r.get("keys", {}).items():
             s += f" [{k.split()[0]} {100 * v['error']:+.2g}%]"
         cells.append(s)

@@ -9,6 +9,7 @@ perturbation and orderings (layer 1: imports only the foundation modules).
 from .core import Mesh
 from .domain import Arc, Circle, Domain, EllipseArc, Line, Path, Polygon, rectangle_domain
 from .generators import KINDS, disc, generate, lloyd, polygon, rectangle, with_spread
+from .graded import size_near
 from .locate import interpolate
 from .ordering import mesh_dof_order, spatial_order
 from .periodic import periodic_sample, periodic_square
@@ -33,6 +34,7 @@ __all__ = [
     "generate",
     "lloyd",
     "with_spread",
+    "size_near",
     "periodic_square",
     "periodic_sample",
     "Sampling",

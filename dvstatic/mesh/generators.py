@@ -26,6 +26,7 @@ from .._checks import check_choice, check_positive, check_seed
 from ..errors import InputError
 from .core import Mesh
 from .domain import Circle, Domain, Polygon, rectangle_domain
+from .graded import SizeField, check_h, density_points, local_h, min_h, spaced
 from .ordering import spatial_order
 from .recipe import Sampling
 from .sampling import cell_centroids, unit_disc
@@ -76,8 +77,10 @@ def rectangle(
     ----------
     width, height : float
         Rectangle size (length units), > 0.
-    h : float
-        Target node spacing, 0 < h <= min(width, height).
+    h : float or callable
+        Target node spacing, 0 < h <= min(width, height); or a size field ``h(x) ->
+        (m,)`` for points ``x`` (m, 2): a graded CVT mesh whose spacing follows it
+        (:mod:`dvstatic.mesh.graded`; ``kind`` "lattice"/"jittered" become "cvt").
     kind : {"lattice", "jittered", "random", "cvt"}
         ``lattice``: regular triangular lattice (rows ``h sqrt(3)/2`` apart, exact
         equilateral triangles when the size fits); ``jittered``: lattice nodes shifted
@@ -104,6 +107,9 @@ def rectangle(
     """
     width = check_positive("width", width)
     height = check_positive("height", height)
+    if callable(h):
+        domain = rectangle_domain(width, height)
+        return generate(Domain(domain.outer, (), tuple(regions)), h, kind, jitter, seed)
     h = check_positive("h", h)
     if h > min(width, height):
         raise InputError(
@@ -116,6 +122,9 @@ def rectangle(
         pts = _random_rectangle_points(width, height, h, rng)
     else:
         pts, boundary, side_dir, side_step = _lattice_points(width, height, h)
+        # the lattice's own spacing (within 15 % of h): the jitter is relative to it,
+        # so that the interior has the statistics of the recipe (and its calibration)
+        h = width / lattice_counts(width, height, h)[0]
         if kind == "jittered" and jitter > 0:
             _jitter_rectangle(pts, boundary, side_dir, side_step, width, height, h, jitter, rng)
     domain = rectangle_domain(width, height)
@@ -136,8 +145,9 @@ def generate(
     Parameters
     ----------
     domain : Domain
-    h : float
-        Target node spacing, 0 < h <= the smallest extent of the domain.
+    h : float or callable
+        Target node spacing, 0 < h <= the smallest extent of the domain; or a size
+        field ``h(x) -> (m,)`` (see :func:`rectangle`).
     kind : {"lattice", "jittered", "random", "cvt"}
         As for :func:`rectangle`.
     jitter : float
@@ -152,7 +162,9 @@ def generate(
     """
     if not isinstance(domain, Domain):
         raise TypeError(f"domain must be a dvstatic Domain, got {type(domain).__name__}")
-    h = check_positive("h", h)
+    h = check_h(h, domain)
+    if isinstance(h, SizeField):
+        return _graded(domain, h, kind, seed)
     lo, hi = domain.bbox
     if h > float(np.min(hi - lo)):
         raise InputError(
@@ -165,7 +177,21 @@ def generate(
     bnd, seg_a, seg_b = _loop_points(domain.loops, h, grid)
     inner = _interior_points(domain, h, "random" if kind == "cvt" else kind, jitter, rng, grid)
     inner = _gabriel(inner, seg_a, seg_b)
-    sampling = Sampling(kind, jitter, CVT_ITERATIONS, h=h)
+    sampling = Sampling(kind, jitter, CVT_ITERATIONS, h=grid.hx if grid is not None else h)
+    return _triangulated(domain, np.vstack([bnd, inner]), h, sampling)
+
+
+def _graded(domain: Domain, h: SizeField, kind: str, seed) -> Mesh:
+    """A mesh whose spacing follows the size field ``h``: CVT of density 1 / h^2
+    (``kind="random"``: the random points only)."""
+    kind, _, rng = check_sampling(kind, 0.0, seed)
+    if kind in ("lattice", "jittered"):
+        log.info("a size field makes a CVT mesh (kind %r ignored)", kind)
+        kind = "cvt"
+    bnd, seg_a, seg_b = _loop_points(domain.loops, h)
+    inner = density_points(domain, h, rng, lambda p: _distance_to_boundary(domain, p))
+    inner = _gabriel(inner, seg_a, seg_b)
+    sampling = Sampling(kind, 0.0, CVT_ITERATIONS, h=h.min)
     return _triangulated(domain, np.vstack([bnd, inner]), h, sampling)
 
 
@@ -184,7 +210,7 @@ def _gabriel(inner: np.ndarray, seg_a: np.ndarray, seg_b: np.ndarray) -> np.ndar
     return inner[~np.any(dist < half[idx] * (1 + 1e-9), axis=1)]
 
 
-def _triangulated(domain: Domain, pts: np.ndarray, h: float, sampling: Sampling) -> Mesh:
+def _triangulated(domain: Domain, pts: np.ndarray, h, sampling: Sampling) -> Mesh:
     """The mesh of ``pts`` in ``domain``: region curves added (points near them
     removed), Morton order, Lloyd iterations for ``cvt``, conforming Delaunay
     triangulation."""
@@ -199,29 +225,29 @@ def _triangulated(domain: Domain, pts: np.ndarray, h: float, sampling: Sampling)
     pts = pts[order]
     if sampling.kind == "cvt":
         pts = lloyd(domain, pts, h, sampling.iterations)
-    pts, tri, parts, regions = domain.triangulate(pts, 1e-9 * h, segments=segments)
+    pts, tri, parts, regions = domain.triangulate(pts, 1e-9 * min_h(h), segments=segments)
     mesh = Mesh(pts, tri, parts=parts, regions=regions, domain=domain, sampling=sampling)
     log.debug("generated %s mesh: %r", sampling, mesh)
     return mesh
 
 
-def _region_points(domain: Domain, h: float) -> tuple[np.ndarray, np.ndarray]:
+def _region_points(domain: Domain, h) -> tuple[np.ndarray, np.ndarray]:
     """Points along the region curves inside the body (spacing about h, none within
     0.45 h of the boundary), plus the region corners that lie on the boundary; and the
     segments between consecutive points that run inside the body, (s, 3): two point
     indices and the index of their region curve."""
-    tol = 1e-9 * h
+    tol = 1e-9 * min_h(h)
     pts, segs, k0 = [], [], 0
     n = 0
     for loop in domain.regions:
         curves = loop.pieces()
         keep_pts, keep_curve = [], []
         for k, c in enumerate(curves):
-            p = c.spaced(h)
+            p = spaced(c, h)
             d = _distance_to_domain_boundary(domain, p)
             corner = np.zeros(len(p), dtype=bool)
             corner[0] = not c.closed  # the curve's start is a corner of the loop
-            ok = (d >= 0.45 * h) | (corner & (d <= tol))
+            ok = (d >= 0.45 * local_h(h, p)) | (corner & (d <= tol))
             keep_pts.append(p[ok])
             keep_curve.append(np.full(int(ok.sum()), k0 + k))
         p = np.vstack(keep_pts)
@@ -245,22 +271,23 @@ def _region_points(domain: Domain, h: float) -> tuple[np.ndarray, np.ndarray]:
     return np.vstack(pts), np.vstack(segs).astype(np.int64)
 
 
-def _clear_around(domain: Domain, pts: np.ndarray, rp: np.ndarray, h: float) -> np.ndarray:
+def _clear_around(domain: Domain, pts: np.ndarray, rp: np.ndarray, h) -> np.ndarray:
     """``pts`` without the points within 0.45 h of a region curve: interior points, and
     boundary points (other than the domain's corners) near a region point on the
     boundary or near a region curve that runs inside the body."""
-    tol = 1e-9 * h
+    tol = 1e-9 * min_h(h)
+    hp = np.broadcast_to(local_h(h, pts), (len(pts),))
     on_bnd = _distance_to_domain_boundary(domain, pts) <= tol
-    far = domain.region_distances(pts).min(axis=1) >= 0.45 * h
+    far = domain.region_distances(pts).min(axis=1) >= 0.45 * hp
     bnd_rp = rp[_distance_to_domain_boundary(domain, rp) <= tol]
     if on_bnd.any():
         idx = np.flatnonzero(on_bnd)
         # near a region curve that runs along the boundary is fine; near one that
         # leaves it (or near a region point on the boundary) is not
-        inner = _inner_region_distance(domain, pts[idx], h)
-        near_rp = _near(pts[idx], bnd_rp, 0.45 * h)
+        inner = _inner_region_distance(domain, pts[idx], min_h(h))
+        near_rp = _near(pts[idx], bnd_rp, 0.45 * min_h(h))
         corner = _near(pts[idx], domain.boundary_corners(), tol)
-        far[idx] = ((inner >= 0.45 * h) & ~near_rp) | corner
+        far[idx] = ((inner >= 0.45 * hp[idx]) & ~near_rp) | corner
         far[idx] &= ~_near(pts[idx], bnd_rp, tol)  # the region's own point replaces it
     return pts[far]
 
@@ -407,7 +434,7 @@ class Grid:
         return a + t[:, None] * (b - a)
 
 
-def _loop_points(loops, h: float, grid: Grid | None = None):
+def _loop_points(loops, h, grid: Grid | None = None):
     """Points on every curve of ``loops`` at spacing about h (from the lattice ``grid``
     where a line runs along it), and the segments between consecutive points of each
     loop (start and end points)."""
@@ -415,8 +442,8 @@ def _loop_points(loops, h: float, grid: Grid | None = None):
     for loop in loops:
         pieces = []
         for c in loop.pieces():
-            lp = grid.line_points(c, 1e-9 * h) if grid is not None else None
-            pieces.append(c.spaced(h) if lp is None else lp)
+            lp = grid.line_points(c, 1e-9 * min_h(h)) if grid is not None else None
+            pieces.append(spaced(c, h) if lp is None else lp)
         lp = np.vstack(pieces)
         pts.append(lp)
         a_list.append(lp)
@@ -466,9 +493,7 @@ def _interior_points(
     return p
 
 
-def lloyd(
-    domain: Domain, points: np.ndarray, h: float, iterations: int = CVT_ITERATIONS
-) -> np.ndarray:
+def lloyd(domain: Domain, points: np.ndarray, h, iterations: int = CVT_ITERATIONS) -> np.ndarray:
     """Lloyd relaxation: interior points move to the centroids of their Voronoi cells.
 
     Boundary points (on a domain curve) stay. Cells are clipped to the triangulated
@@ -479,8 +504,9 @@ def lloyd(
     ----------
     domain : Domain
     points : ndarray, shape (N, 2)
-    h : float
-        Spacing (sets the tolerance for "on the boundary").
+    h : float or SizeField
+        Spacing (sets the tolerance for "on the boundary"); a size field weights the
+        centroids by the density ``1 / h^2``.
     iterations : int
 
     Returns
@@ -488,15 +514,18 @@ def lloyd(
     ndarray, shape (N, 2)
     """
     p = np.array(points, dtype=float)
-    on_bnd = _distance_to_boundary(domain, p) <= 1e-9 * h
+    hmin = min_h(h)
+    density = (lambda x: (hmin / h(x)) ** 2) if isinstance(h, SizeField) else None
+    on_bnd = _distance_to_boundary(domain, p) <= 1e-9 * hmin
     movable = np.flatnonzero(~on_bnd)
     for _ in range(iterations):
         tri = domain.delaunay(p)
-        area, centroid = cell_centroids(p[tri], tri, len(p))
-        ok = area[movable] > 1e-12 * h * h
+        area, centroid = cell_centroids(p[tri], tri, len(p), density=density)
+        ok = area[movable] > 1e-12 * hmin * hmin
         idx = movable[ok]
         target = centroid[idx]
-        inside = domain.contains(target) & (_distance_to_boundary(domain, target) > 0.2 * h)
+        far = _distance_to_boundary(domain, target) > 0.2 * local_h(h, target)
+        inside = domain.contains(target) & far
         p[idx[inside]] = target[inside]
     return p
 

@@ -58,7 +58,7 @@ def move_in_domain(domain: Domain, p: np.ndarray, amplitude: float, rng, tol: fl
 
 
 def cell_centroids(
-    x: np.ndarray, tri: np.ndarray, n: int, offsets: np.ndarray | None = None
+    x: np.ndarray, tri: np.ndarray, n: int, offsets: np.ndarray | None = None, density=None
 ) -> tuple[np.ndarray, np.ndarray]:
     """Areas (n,) and centroids (n, 2) of the Voronoi cells of ``n`` points, from the
     Delaunay triangles ``tri`` (M, 3) with vertex positions ``x`` (M, 3, 2): each
@@ -66,7 +66,9 @@ def cell_centroids(
     midpoint, circumcentre), signed so that obtuse triangles subtract what lies outside.
     Cells of points on the hull are clipped to it (Lloyd iterations keep those fixed).
     ``offsets`` (M, 3, 2) (periodic meshes: image times period) is subtracted from the
-    pieces of each vertex, so that its centroid is near its own position."""
+    pieces of each vertex, so that its centroid is near its own position. With
+    ``density(points) -> (m,)`` the centroids are weighted by it (evaluated at the
+    centre of every piece)."""
     cc = circumcentres(x)
     area = np.zeros(n)
     moment = np.zeros((n, 2))
@@ -79,6 +81,8 @@ def cell_centroids(
             xv = x[:, v]
             sa = 0.5 * np.abs(cross(mid - xv, cc - xv)) * sign
             c = (xv + mid + cc) / 3.0
+            if density is not None:
+                sa = sa * density(c)
             if offsets is not None:
                 c = c - offsets[:, v]
             area += np.bincount(tri[:, v], sa, n)

@@ -12,6 +12,7 @@ from ..io import read_mesh
 from ..lattice import DV, RV
 from ..mesh import generators as meshgen
 from ..mesh.domain import Circle, Domain, Polygon, rectangle_domain
+from ..mesh.graded import size_near
 from ..problem import BodyForce, Fix, PointLoad, Pressure, Traction
 from .schema import SOLVER_KEYS, SceneError
 
@@ -41,11 +42,14 @@ class Scene:
         regions = [self._loop(f"mesh.regions[{i}]", r) for i, r in enumerate(m["regions"])]
         common = {"kind": m["kind"], "jitter": m["jitter"], "seed": m["seed"]}
         try:
+            domain = Domain(self._outer(m), tuple(holes), tuple(regions))
+            if m["refine_near"]:
+                h = size_near(domain, m["refine_near"], m["h_near"], m["h"], m["grading"])
+                return meshgen.generate(domain, h, **common)
             if m["type"] == "rectangle" and not holes:
                 return meshgen.rectangle(
                     m["width"], m["height"], m["h"], regions=tuple(regions), **common
                 )
-            domain = Domain(self._outer(m), tuple(holes), tuple(regions))
             return meshgen.generate(domain, m["h"], **common)
         except InputError as exc:
             raise self._err(_MESH_KEYS.get(exc.param, "mesh"), exc) from None
@@ -225,6 +229,9 @@ _MESH_KEYS = {
     "radius": "mesh.radius",
     "center": "mesh.center",
     "holes": "mesh.holes",
+    "h_near": "mesh.h_near",
+    "parts": "mesh.refine_near",
+    "distance": "mesh.grading",
 }
 #: scene key of the model's arguments
 _MODEL_KEYS = {

@@ -101,6 +101,16 @@ SCHEMA: dict[str, F] = {
                 "physical line groups become parts",
             ),
             "holes": F("tables", "holes of a rectangle, polygon or disc", default=[], schema=HOLE),
+            "refine_near": F(
+                "strings",
+                "graded mesh: names of boundary curves or regions (a hole, a loaded side) "
+                "near which the spacing is h_near, growing to h over `grading` (a CVT mesh)",
+                default=[],
+            ),
+            "h_near": F("number", "graded mesh: spacing on the refine_near curves (length)"),
+            "grading": F(
+                "number", "graded mesh: distance over which the spacing grows to h (length)"
+            ),
             "regions": F(
                 "tables",
                 "named regions inside the body (the triangles conform to them); give each "
@@ -244,11 +254,12 @@ SCHEMA: dict[str, F] = {
             ),
             "stress": F(
                 "string",
-                "stress recovery of the picture: virial (the lattice's bond "
-                "forces) or strain (plane-stress law on the lattice strain; better at free "
-                "surfaces)",
-                default="virial",
-                choices=("virial", "strain"),
+                "stress recovery of the picture and the VTU: recovered (patch fits with "
+                "the continuum law, equilibrated fits at boundaries: right at free and curved "
+                "edges), virial (the lattice's bond forces over each Voronoi cell) or strain "
+                "(area-averaged lattice strain); nonlinear solves use virial",
+                default="recovered",
+                choices=("recovered", "virial", "strain"),
             ),
             "scale": F("number", "displacement magnification of the picture (default: auto)"),
             "name": F("string", "file name stem (default: the scene file's stem)"),
@@ -463,6 +474,13 @@ def _check_rules(path, d: dict) -> None:
     for key in need:
         if m[key] is None:
             raise SceneError(path, f"mesh.{key}", f"required for mesh type {m['type']!r}")
+    graded = [m["h_near"] is not None, m["grading"] is not None, bool(m["refine_near"])]
+    if any(graded) and not all(graded):
+        raise SceneError(
+            path, "mesh.refine_near", "a graded mesh needs refine_near, h_near and grading"
+        )
+    if all(graded) and m["type"] == "file":
+        raise SceneError(path, "mesh.refine_near", "a mesh read from a file cannot be graded")
     for i, h in enumerate(m["holes"]):
         need_h = ("center", "radius") if h["type"] == "circle" else ("vertices",)
         for key in need_h:

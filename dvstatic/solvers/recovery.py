@@ -33,7 +33,7 @@ from ..problem import (
     select_edges,
     select_nodes,
 )
-from .trefftz import trefftz_stress, window_size
+from .trefftz import patches, trefftz_stress, window_size
 
 __all__ = ["recovered_stress", "PATCH_TRIANGLES", "GAUGE_NODES", "CORNER_DEGREES"]
 
@@ -41,6 +41,11 @@ __all__ = ["recovered_stress", "PATCH_TRIANGLES", "GAUGE_NODES", "CORNER_DEGREES
 PATCH_TRIANGLES = 30
 #: boundary nodes on each side of a node in its strain gauge
 GAUGE_NODES = 3
+#: a concave boundary whose radius of curvature is under this many spacings is a
+#: hole: its nodes are fitted with the Laurent fields about its centre
+HOLE_RADII = 200.0
+#: boundary nodes on each side of a node in the smoothing along the boundary
+SMOOTH_NODES = 3
 #: a boundary node whose edges turn by more than this is a corner (patch fit there)
 CORNER_DEGREES = 20.0
 
@@ -152,13 +157,15 @@ def _boundary(model: VoronoiModel, u, sigma, node_mat, supports, loads) -> None:
     frames = _Frames(model, u, node_mat, fixed, _Tractions(mesh, loads))
     nodes = mesh.boundary_nodes
     body = _body_forces(model, loads, nodes)
-    k = window_size(mesh.n_points)
+    idx, dist = patches(mesh.points, _adjacency(mesh), nodes, window_size(mesh.n_points))
+    centres = _hole_centres(mesh, frames, nodes)
+    # a patch of one material only (the fields are those of a homogeneous body)
+    homogeneous = np.all((node_mat[idx] == node_mat[nodes][:, None]) | ~np.isfinite(dist), axis=1)
     consts = [m.in_plane for m in model.all_materials]
     for m, (E, nu) in enumerate(consts):
-        sel = nodes[node_mat[nodes] == m]
-        if len(model.all_materials) > 1:
-            sel = sel[_homogeneous_patches(mesh, node_mat, sel, k)]
-        if len(sel):
+        rows = np.flatnonzero((node_mat[nodes] == m) & homogeneous)
+        if len(rows):
+            sel = nodes[rows]
             sigma[sel] = trefftz_stress(
                 mesh.points,
                 u,
@@ -168,19 +175,80 @@ def _boundary(model: VoronoiModel, u, sigma, node_mat, supports, loads) -> None:
                 frames.traction,
                 frames.normal,
                 frames.known,
-                body=None if body is None else body[np.searchsorted(nodes, sel)],
-                k=k,
+                (idx[rows], dist[rows]),
+                body=None if body is None else body[rows],
+                centres=centres[rows],
             )
             frames.gauge_ok[sel] = False
     sigma[frames.gauge_ok] = frames.gauge[frames.gauge_ok]
+    _smooth_along(mesh, sigma, frames)
 
 
-def _homogeneous_patches(mesh: Mesh, node_mat, sel: np.ndarray, k: int) -> np.ndarray:
-    """Which of the nodes ``sel`` have all of their ``k`` nearest nodes in one material."""
-    from scipy.spatial import cKDTree
+def _smooth_along(mesh: Mesh, sigma: np.ndarray, frames) -> None:
+    """Quadratic least squares of the stress along the boundary (``sigma_tt``) over
+    ``SMOOTH_NODES`` nodes on each side, on every free or loaded piece: it removes the
+    node-to-node scatter that the lattice's surface displacements leave, and keeps
+    peaks (a quadratic is reproduced). ``sigma_nn`` and ``sigma_nt`` are the known
+    stress vector and stay."""
+    for chain, closed in frames.chains:
+        nodes = chain[frames.known[chain]]
+        if len(nodes) < 2 * SMOOTH_NODES + 1:
+            continue
+        t = frames.tangent[nodes]
+        s_tt = np.einsum("ni,nij,nj->n", t, sigma[nodes], t)
+        p = mesh.points[nodes]
+        seg = np.hypot(*np.diff(np.vstack([p, p[:1]]) if closed else p, axis=0).T)
+        s = np.concatenate([[0.0], np.cumsum(seg)])
+        smooth = _savitzky_golay(s, s_tt, closed)
+        sigma[nodes] += (smooth - s_tt)[:, None, None] * np.einsum("ni,nj->nij", t, t)
 
-    _, idx = cKDTree(mesh.points).query(mesh.points[sel], k=min(k, mesh.n_points))
-    return np.all(node_mat[idx] == node_mat[sel][:, None], axis=1)
+
+def _savitzky_golay(s: np.ndarray, v: np.ndarray, closed: bool) -> np.ndarray:
+    """Values ``v`` at arc lengths ``s`` smoothed by local quadratic fits over
+    ``SMOOTH_NODES`` neighbours on each side (one-sided at the ends of an open piece)."""
+    n = len(v)
+    m = SMOOTH_NODES
+    offs = np.arange(-m, m + 1)
+    out = np.empty(n)
+    for i in range(n):
+        if closed:
+            j = (i + offs) % n
+            si = _wrapped(s, i, offs, n, s[-1])
+        else:
+            lo = min(max(i - m, 0), n - 2 * m - 1)
+            j = np.arange(lo, lo + 2 * m + 1)
+            si = s[j] - s[i]
+        coef = np.polyfit(si, v[j], 2)
+        out[i] = coef[-1]
+    return out
+
+
+def _hole_centres(mesh: Mesh, frames, nodes: np.ndarray) -> np.ndarray:
+    """Centre (x, y) and radius of curvature of the boundary at ``nodes`` where it bends
+    around a hole (the centre outside the body, at most HOLE_RADII spacings away), NaN
+    elsewhere; shape (len(nodes), 3)."""
+    k = frames.curvature[nodes]
+    kk = np.einsum("ij,ij->i", k, k)
+    out = np.full((len(nodes), 3), np.nan)
+    radius = 1.0 / np.sqrt(np.maximum(kk, 1e-300))
+    hole = (
+        frames.known[nodes]
+        & (np.einsum("ij,ij->i", k, frames.normal[nodes]) > 0)
+        & (radius < HOLE_RADII * mesh.h)
+    )
+    out[hole, :2] = mesh.points[nodes[hole]] + k[hole] / kk[hole, None]
+    out[hole, 2] = radius[hole]
+    return out
+
+
+def _adjacency(mesh: Mesh):
+    """Node adjacency of the bonds, CSR (N, N) bool."""
+    import scipy.sparse as sp
+
+    b = mesh.topology.bonds
+    n = mesh.n_points
+    a = sp.coo_matrix((np.ones(len(b), dtype=bool), (b[:, 0], b[:, 1])), shape=(n, n))
+    return (a + a.T).tocsr().astype(bool)
 
 
 def _body_forces(model: VoronoiModel, loads, nodes: np.ndarray) -> np.ndarray | None:
@@ -217,9 +285,12 @@ class _Frames:
         self.known = np.zeros(n, dtype=bool)
         self.gauge = np.zeros((n, 2, 2))
         self.gauge_ok = np.zeros(n, dtype=bool)
+        self.tangent = np.zeros((n, 2))
+        self.curvature = np.zeros((n, 2))  # curvature vector (towards the centre)
+        self.chains = _boundary_chains(mesh, fixed)
         consts = np.array([m.in_plane for m in model.all_materials])
-        for chain, closed in _boundary_chains(mesh, fixed):
-            for i, t, nrm, eps_tt in _gauge_strains(mesh.points[chain], u[chain], closed):
+        for chain, closed in self.chains:
+            for i, t, nrm, eps_tt, kvec in _gauge_strains(mesh.points[chain], u[chain], closed):
                 node = chain[i]
                 inside = closed or 0 < i < len(chain) - 1
                 if self.known[node] or (fixed[node] and inside) or node in traction.point_nodes:
@@ -233,7 +304,8 @@ class _Frames:
                     + s_nn * np.outer(nrm, nrm)
                     + s_tn * (np.outer(t, nrm) + np.outer(nrm, t))
                 )
-                self.normal[node], self.traction[node] = nrm, tv
+                self.normal[node], self.traction[node], self.tangent[node] = nrm, tv, t
+                self.curvature[node] = kvec
                 self.known[node] = self.gauge_ok[node] = True
 
 
@@ -308,7 +380,7 @@ def _gauge_strains(p: np.ndarray, u: np.ndarray, closed: bool):
         dp, *_ = np.linalg.lstsq(vand, p[j] * w[:, None], rcond=None)
         t = dp[1] / np.hypot(*dp[1])
         normal = np.array([t[1], -t[0]])  # the body is on the left: outward is to the right
-        yield i, t, normal, float(t @ coef[1])
+        yield i, t, normal, float(t @ coef[1]), 2 * dp[2]
 
 
 def _wrapped(s: np.ndarray, i: int, offs: np.ndarray, n: int, total: float) -> np.ndarray:

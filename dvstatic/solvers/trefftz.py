@@ -25,8 +25,13 @@ import numpy as np
 
 __all__ = ["trefftz_stress", "window_size", "DEGREE", "TRACTION_WEIGHT"]
 
-#: polynomial degree of phi and psi
+#: polynomial degree of phi and psi (at most; smaller patches get fewer)
 DEGREE = 6
+#: patch nodes per unit of degree (a degree-p fit has 4 p + 2 unknowns)
+NODES_PER_DEGREE = 10
+#: largest Laurent degree about a hole's centre (-p ... p: 8 p + 2 unknowns); the
+#: fields of a free or pressurised circular hole in uniform stress need 3
+LAURENT_DEGREE = 4
 #: weight of a traction row at the other boundary nodes of a patch (relative to a
 #: displacement row, in strain units)
 TRACTION_WEIGHT = 10.0
@@ -43,15 +48,20 @@ def window_size(n_points: int) -> int:
 
 
 class _Basis:
-    """Displacement and stress of the ``4 p + 2`` Kolosov-Muskhelishvili fields."""
+    """Displacement and stress of the Kolosov-Muskhelishvili fields: powers ``0..p`` of
+    ``phi`` and ``1..p`` of ``psi`` (``4 p + 2`` fields), or with ``laurent`` the powers
+    ``-p..p`` about a centre outside the body (a hole's), ``8 p + 2`` fields: those
+    represent the fields around a traction-free or pressurised hole exactly."""
 
-    def __init__(self, E: float, nu: float, p: int):
+    def __init__(self, E: float, nu: float, p: int, laurent: bool = False):
         self.E = E
         self.mu = E / (2 * (1 + nu))
         self.kappa = (3 - nu) / (1 + nu)
         self.lam = E * nu / (1 - nu**2)  # in-plane lambda*
-        self.terms = [("phi", k, c) for k in range(p + 1) for c in (1.0, 1j)]
-        self.terms += [("psi", k, c) for k in range(1, p + 1) for c in (1.0, 1j)]
+        self.degree = p
+        lo = -p if laurent else 0
+        self.terms = [("phi", k, c) for k in range(lo, p + 1) for c in (1.0, 1j)]
+        self.terms += [("psi", k, c) for k in range(lo, p + 1) if k != 0 for c in (1.0, 1j)]
 
     @property
     def size(self) -> int:
@@ -59,38 +69,44 @@ class _Basis:
 
     def displacement(self, z: np.ndarray) -> np.ndarray:
         """``2 mu u`` (complex ux + i uy) of every field at ``z``, shape z.shape + (nb,)."""
-        powers = self._powers(z)
+        pw = _Powers(z)
         out = np.empty(z.shape + (self.size,), dtype=complex)
         for col, (kind, k, c) in enumerate(self.terms):
             if kind == "phi":
-                d1 = c * k * powers[k - 1] if k >= 1 else 0.0
-                out[..., col] = self.kappa * c * powers[k] - z * np.conj(d1)
+                d1 = c * k * pw(k - 1) if k != 0 else 0.0
+                out[..., col] = self.kappa * c * pw(k) - z * np.conj(d1)
             else:
-                out[..., col] = -np.conj(c * powers[k])
+                out[..., col] = -np.conj(c * pw(k))
         return out
 
     def stress(self, z: np.ndarray) -> np.ndarray:
         """``(sxx, syy, sxy)`` of every field at ``z``, shape z.shape + (nb, 3)."""
-        powers = self._powers(z)
+        pw = _Powers(z)
         out = np.empty(z.shape + (self.size, 3))
         zc = np.conj(z)
         for col, (kind, k, c) in enumerate(self.terms):
             if kind == "phi":
-                tr = 4 * np.real(c * k * powers[k - 1]) if k >= 1 else 0.0
-                dev = 2 * zc * (c * k * (k - 1) * powers[k - 2]) if k >= 2 else 0.0 * z
+                tr = 4 * np.real(c * k * pw(k - 1)) if k != 0 else 0.0
+                dev = 2 * zc * (c * k * (k - 1) * pw(k - 2)) if k not in (0, 1) else 0.0 * z
             else:
-                tr, dev = 0.0, 2 * c * k * powers[k - 1]
+                tr, dev = 0.0, 2 * c * k * pw(k - 1)
             out[..., col, 0] = 0.5 * (tr - dev.real)
             out[..., col, 1] = 0.5 * (tr + dev.real)
             out[..., col, 2] = 0.5 * dev.imag
         return out
 
-    @staticmethod
-    def _powers(z: np.ndarray) -> list[np.ndarray]:
-        out = [np.ones_like(z)]
-        for _ in range(DEGREE):
-            out.append(out[-1] * z)
-        return out
+
+class _Powers:
+    """Integer powers of an array, each computed once."""
+
+    def __init__(self, z: np.ndarray):
+        self.z = z
+        self.cache: dict[int, np.ndarray] = {0: np.ones_like(z)}
+
+    def __call__(self, k: int) -> np.ndarray:
+        if k not in self.cache:
+            self.cache[k] = self.z**k if k > 0 else 1.0 / self.z ** (-k)
+        return self.cache[k]
 
 
 def trefftz_stress(
@@ -102,8 +118,9 @@ def trefftz_stress(
     traction: np.ndarray,
     normal: np.ndarray,
     known: np.ndarray,
+    neighbours: tuple[np.ndarray, np.ndarray],
     body: np.ndarray | None = None,
-    k: int | None = None,
+    centres: np.ndarray | None = None,
     chunk: int = 128,
 ) -> np.ndarray:
     """Stress (len(nodes), 2, 2) at ``nodes`` from equilibrated fits.
@@ -120,41 +137,104 @@ def trefftz_stress(
         Known stress vector and outward normal at boundary nodes.
     known : ndarray of bool, shape (N,)
         Nodes whose stress vector is known (free or loaded boundary).
+    neighbours : (ndarray, ndarray), shapes (len(nodes), k)
+        The patch of every node (its own index first) and the distances; a distance
+        of ``inf`` pads a short patch (see :func:`patches`).
     body : ndarray, shape (len(nodes), 2), optional
         Constant body force (force per volume) around each node.
-    k : int, optional
-        Nodes per patch (default :func:`window_size`).
+    centres : ndarray, shape (len(nodes), 3), optional
+        For nodes on a hole: its centre of curvature (x, y) and radius, NaN elsewhere.
+        Those nodes use the Laurent fields about the centre.
     """
-    from scipy.spatial import cKDTree
-
-    basis = _Basis(E, nu, DEGREE)
-    k = min(k or window_size(len(points)), len(points))
-    tree = cKDTree(points)
+    idx_all, dist_all = neighbours
     out = np.zeros((len(nodes), 2, 2))
-    for start in range(0, len(nodes), chunk):
-        sel = nodes[start : start + chunk]
-        b = None if body is None else body[start : start + chunk]
-        dist, idx = tree.query(points[sel], k=k)
-        out[start : start + chunk] = _fit(
-            basis, points, u, sel, dist, idx, traction, normal, known, b
-        )
+    if centres is None:
+        centres = np.full((len(nodes), 3), np.nan)
+    hole = np.isfinite(centres[:, 2])
+    # the degree follows the patch: about ten nodes (twenty equations) per degree
+    count = np.isfinite(dist_all).sum(axis=1)
+    degree = np.where(
+        hole,
+        np.clip(count // (2 * NODES_PER_DEGREE), 2, LAURENT_DEGREE),
+        np.clip(count // NODES_PER_DEGREE, 2, DEGREE),
+    )
+    for laurent in (False, True):
+        for p in np.unique(degree[hole == laurent]):
+            basis = _Basis(E, nu, int(p), laurent)
+            rows = np.flatnonzero((degree == p) & (hole == laurent))
+            for start in range(0, len(rows), chunk):
+                r = rows[start : start + chunk]
+                out[r] = _fit(
+                    basis,
+                    points,
+                    u,
+                    nodes[r],
+                    dist_all[r],
+                    idx_all[r],
+                    (traction, normal, known),
+                    None if body is None else body[r],
+                    centres[r] if laurent else None,
+                )
     return out
 
 
-def _fit(basis: _Basis, points, u, sel, dist, idx, traction, normal, known, body) -> np.ndarray:
+def patches(points: np.ndarray, adjacency, nodes: np.ndarray, k: int):
+    """The ``k`` nearest nodes of each of ``nodes`` among those reachable through the
+    mesh within a few rings of bonds: a window never reaches across a hole or a notch
+    to the other side.
+
+    Returns
+    -------
+    idx : ndarray of int, shape (len(nodes), k)
+        The node itself first; short patches are padded with it.
+    dist : ndarray, shape (len(nodes), k)
+        Distances, ``inf`` for the padding (zero weight).
+    """
+    import scipy.sparse as sp
+
+    rings = int(np.ceil(np.sqrt(k / 2.5))) + 2
+    n = len(points)
+    reach = sp.csr_matrix(
+        (np.ones(len(nodes), dtype=bool), (np.arange(len(nodes)), nodes)), shape=(len(nodes), n)
+    )
+    step = (adjacency + sp.identity(n, dtype=bool, format="csr")).astype(bool)
+    for _ in range(rings):
+        reach = (reach @ step).astype(bool)
+    reach = reach.tocsr()
+    idx = np.repeat(nodes[:, None], k, axis=1)
+    dist = np.full((len(nodes), k), np.inf)
+    dist[:, 0] = 0.0
+    for r in range(len(nodes)):
+        cand = reach.indices[reach.indptr[r] : reach.indptr[r + 1]]
+        d = np.hypot(*(points[cand] - points[nodes[r]]).T)
+        take = np.argsort(d)[:k]
+        idx[r, : len(take)], dist[r, : len(take)] = cand[take], d[take]
+    return idx, dist
+
+
+def _fit(basis: _Basis, points, u, sel, dist, idx, bc, body, centres) -> np.ndarray:
+    """Weighted least-squares fit of the fields to the patch displacements, the known
+    stress vector imposed at the node; the stress at the node (n, 2, 2)."""
+    traction, normal, known = bc
     n, k = idx.shape
     nb = basis.size
-    s = 1.2 * dist[:, -1]  # window radius
-    z = (
-        (points[idx, 0] - points[sel, None, 0]) + 1j * (points[idx, 1] - points[sel, None, 1])
-    ) / s[:, None]
-    w = (1.0 - (dist / s[:, None]) ** 2) ** 2
+    finite = np.isfinite(dist)
+    radius = 1.2 * np.max(np.where(finite, dist, 0.0), axis=1)  # window radius
+    dz = (points[idx, 0] - points[sel, None, 0]) + 1j * (points[idx, 1] - points[sel, None, 1])
+    if centres is None:  # polynomials about the node
+        s = radius
+        z = dz / s[:, None]
+    else:  # Laurent series about the hole's centre, scaled by its radius
+        s = centres[:, 2]
+        c = centres[:, 0] + 1j * centres[:, 1]
+        z = (points[idx, 0] + 1j * points[idx, 1] - c[:, None]) / s[:, None]
+    w = np.where(finite, (1.0 - (np.where(finite, dist, 0.0) / radius[:, None]) ** 2) ** 2, 0.0)
     two_mu = 2 * basis.mu
     U = basis.displacement(z)  # (n, k, nb)
     A = np.concatenate([U.real, U.imag], axis=1)  # (n, 2k, nb)
     data = two_mu * np.concatenate([u[idx, 0], u[idx, 1]], axis=1)  # (n, 2k)
     if body is not None:
-        data -= two_mu * np.concatenate(_particular(basis, z * s[:, None], body), axis=1)
+        data -= two_mu * np.concatenate(_particular(basis, dz, body), axis=1)
     W = np.concatenate([w, w], axis=1)
     AW = A * W[..., None]
     M = np.swapaxes(AW, 1, 2) @ A
@@ -171,9 +251,9 @@ def _fit(basis: _Basis, points, u, sel, dist, idx, traction, normal, known, body
     )  # (n, k, 2, nb): stress vector of every field
     tv = traction[idx]  # (n, k, 2)
     if body is not None:
-        tv = tv - np.einsum("nkij,nkj->nki", _particular_stress(basis, z * s[:, None], body), nrm)
+        tv = tv - np.einsum("nkij,nkj->nki", _particular_stress(basis, dz, body), nrm)
     # a stress row in displacement units (like the data: 2 mu u): stress * s / E * 2 mu
-    scale2 = (two_mu * s / basis.E) ** 2
+    scale2 = (two_mu * radius / basis.E) ** 2
     wt = TRACTION_WEIGHT * w * known[idx] * scale2[:, None]
     wt[:, 0] = 0.0  # the node itself: imposed exactly below
     R = rows.reshape(n, 2 * k, nb)
