@@ -22,6 +22,7 @@ import shutil
 import subprocess
 import sys
 import time
+from datetime import UTC, datetime
 from pathlib import Path
 
 import numpy as np
@@ -75,7 +76,7 @@ def _show_progress(args) -> bool:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from . import fem, scene
+    from . import scene
     from .solvers import solve
 
     sc = scene.load(args.scene, args.set or ())
@@ -88,40 +89,26 @@ def _run(args: argparse.Namespace) -> int:
             "pass --overwrite to replace its files or choose --out",
         )
     t0 = time.perf_counter()
+    say = _Stages(not args.quiet)
+    say("building the mesh")
     mesh = sc.build_mesh()
+    say(f"calibrating the model on {mesh.n_points} nodes")
     model = sc.build_model(mesh)
     supports = sc.build_supports(mesh)
     loads = sc.build_loads(mesh)
+    sc.check_outputs(mesh)  # before the solve, not after it
+    say(f"solving ({model.kind}, {2 * mesh.n_points} dof)")
     try:
         sol = solve(model, supports, loads, progress=_show_progress(args), **sc.solve_options())
     except InputError as exc:  # e.g. supports that leave a rigid motion free
         raise scene.SceneError(sc.path, _solve_error_key(scene, exc), str(exc)) from None
+    except SolverError as exc:
+        exc.args = (f"{sc.path}: {exc}",)
+        raise
     if sol.u is None:  # an MPI rank other than 0 of a solver="petsc" run: rank 0 writes
         return 0
-    o = sc.data["output"]
-    fe = None
-    if o["fe_compare"]:
-        mat = sc.data["material"]
-        fe = fem.solve(
-            mesh,
-            mat["E"],
-            mat["nu"],
-            supports,
-            loads,
-            order=o["fe_order"],
-            refine=o["fe_refine"],
-            plane=mat["plane"],
-            thickness=mat["thickness"],
-            materials={m["region"]: (m["E"], m["nu"]) for m in sc.data["materials"]} or None,
-        )
-    for i, name in enumerate(o["part_stress"]):
-        if name not in mesh.parts:
-            raise scene.SceneError(
-                sc.path,
-                f"output.part_stress[{i}]",
-                f"unknown boundary part {name!r}; known parts: "
-                + ", ".join(repr(k) for k in mesh.parts),
-            )
+    fe = _fe_reference(sc, mesh, supports, loads, say)
+    say("recovering stresses and writing the outputs")
     data, written = _write_outputs(sc, sol, fe, out_dir, args, t0)
     _print_summary(sc, data, [out_dir / w for w in written])
     if not sol.info.converged:
@@ -131,6 +118,39 @@ def _run(args: argparse.Namespace) -> int:
         )
         return 4
     return 0
+
+
+class _Stages:
+    """One line on stderr as each stage of a run starts (none with ``--quiet``)."""
+
+    def __init__(self, on: bool):
+        self.on, self.t0 = on, time.perf_counter()
+
+    def __call__(self, text: str) -> None:
+        if self.on:
+            print(f"[{time.perf_counter() - self.t0:6.1f} s] {text} ...", file=sys.stderr)
+
+
+def _fe_reference(sc, mesh, supports, loads, say):
+    """The FE solution of ``[output] fe_compare`` (None if not asked for)."""
+    from . import fem
+
+    o, mat = sc.data["output"], sc.data["material"]
+    if not o["fe_compare"]:
+        return None
+    say(f"FE reference (P{o['fe_order']}, {o['fe_refine']} refinement(s))")
+    return fem.solve(
+        mesh,
+        mat["E"],
+        mat["nu"],
+        supports,
+        loads,
+        order=o["fe_order"],
+        refine=o["fe_refine"],
+        plane=mat["plane"],
+        thickness=mat["thickness"],
+        materials={m["region"]: (m["E"], m["nu"]) for m in sc.data["materials"]} or None,
+    )
 
 
 def _write_outputs(sc, sol, fe, out_dir: Path, args, t0: float) -> tuple[dict, list[str]]:
@@ -148,22 +168,36 @@ def _write_outputs(sc, sol, fe, out_dir: Path, args, t0: float) -> tuple[dict, l
     try:
         if o["vtu"]:
             written.append(io.write_vtu(stage / f"{sc.name}.vtu", sol).name)
+            written.append(io.write_bonds_vtu(stage / f"{sc.name}_bonds.vtu", sol).name)
+        scale = o["scale"] or io.default_scale(sol)
         if o["png"]:
             png = io.write_png(
                 stage / f"{sc.name}.png",
                 sol,
                 field=o["field"],
-                scale=o["scale"],
+                scale=scale,
                 title=sc.data["title"] or None,
                 stress=o["stress"],
             )
             written.append(png.name)
-        data = io.summary(sol, fe=fe, probes=o["probes"] or None, part_stress=o["part_stress"])
+        data = io.summary(
+            sol,
+            fe=fe,
+            probes=o["probes"] or None,
+            part_stress=o["part_stress"],
+            stress=None if sol.info.nonlinear else o["stress"],
+            checks=o["checks"],
+        )
         data["scene"] = {
             "file": str(sc.path),
             "title": sc.data["title"],
             "overrides": list(args.set or ()),
+            "resolved": sc.data,  # every key, defaults filled in
         }
+        if o["png"]:
+            data["picture"] = {"file": png.name, "field": o["field"], "magnification": scale}
+        data["dvstatic_version"] = __version__
+        data["created"] = datetime.now(UTC).isoformat(timespec="seconds")
         data["seconds_total"] = time.perf_counter() - t0
         if o["json"]:
             written.append(io.write_json(stage / f"{sc.name}.json", data).name)
@@ -217,21 +251,53 @@ def _model_line(md: dict) -> str:
     return txt
 
 
+def _solver_line(s: dict) -> str:
+    """The solver, its iterations (where it iterates), residual and time."""
+    parts = [s["solver"]]
+    if s.get("nonlinear"):
+        parts.append(
+            f"Newton: {s['iterations']} iterations in {s.get('steps', 0)} load steps"
+            + (f" ({s['cutbacks']} cut-backs)" if s.get("cutbacks") else "")
+        )
+    elif s["solver"] != "direct":
+        parts.append(f"{s['iterations']} iterations")
+    parts.append(f"relative residual {s['residual']:.2e}")
+    parts.append(f"{s['seconds'].get('total', float('nan')):.3f} s")
+    return ", ".join(parts)
+
+
+def _check_text(c: dict) -> str:
+    """A key number against its reference (and the FE value, if any)."""
+
+    def diff(v: float) -> str:
+        return f"{v:+.2%}" if c["reference"] != 0 else f"{v:+.3g}"
+
+    txt = (
+        f"{c['quantity']} = {c['value']:.5g} against {c['reference']:.5g} "
+        f"({diff(c['difference'])}{', ' + c['source'] if c.get('source') else ''})"
+    )
+    if "fe_value" in c:
+        txt += f"; FE {c['fe_value']:.5g} ({diff(c['fe_difference'])})"
+    return txt
+
+
 def _print_summary(sc, d: dict, written: list[Path]) -> None:
     m, md, s = d["mesh"], d["model"], d["solver"]
     rows = [
         ("scene", f"{sc.path}" + (f"  ({sc.data['title']})" if sc.data["title"] else "")),
+        *([("overrides", ", ".join(d["scene"]["overrides"]))] if d["scene"]["overrides"] else []),
         ("mesh", f"{m['nodes']} nodes, {m['bonds']} bonds, sigma_L = {m['sigma_L']:.4f}"),
         ("model", _model_line(md)),
-        (
-            "solver",
-            f"{s['solver']}{' (nonlinear)' if s.get('nonlinear') else ''}, "
-            f"{s.get('iterations', '?')} iterations, "
-            f"residual {s.get('residual', float('nan')):.2e}, "
-            f"{s.get('seconds', {}).get('total', float('nan')):.3f} s",
-        ),
+        ("solver", _solver_line(s)),
         ("max |u|", f"{d['max_displacement']:.6e}"),
     ]
+    if not s["converged"]:
+        state = (
+            "the last converged load step"
+            if s.get("equilibrium", True)
+            else "the last iterate of a step that did not converge, not in equilibrium"
+        )
+        rows.insert(4, ("NOT converged", f"load factor {s['load_factor']:.4g} of 1: {state}"))
     if "strain_energy" in d:
         rows.append(("energy", f"{d['strain_energy']:.6e}"))
     for key, r in d["reactions"].items():
@@ -241,9 +307,10 @@ def _print_summary(sc, d: dict, written: list[Path]) -> None:
             rows.append((f"reaction {key}", ", ".join(f"R{c} = {v:.6g}" for c, v in r.items())))
     if "fe" in d:
         f = d["fe"]
+        refined = {0: "", 1: ", refined once"}.get(f["refine"], f", refined {f['refine']} times")
         rows.append(
             (
-                f"FE P{f['order']} x{f['refine']}",
+                f"FE (P{f['order']}{refined})",
                 f"{f['n_dof']} dof: relative L2 difference {f['rel_l2_difference']:.3%}, "
                 f"max {f['rel_max_difference']:.3%}",
             )
@@ -255,8 +322,8 @@ def _print_summary(sc, d: dict, written: list[Path]) -> None:
             rows.append(
                 (
                     f"probe ({p[0]:g}, {p[1]:g})",
-                    f"u = ({u[0]:.6e}, {u[1]:.6e}), "
-                    f"s = ({st[0][0]:.4g}, {st[1][1]:.4g}, {st[0][1]:.4g})",
+                    f"(ux, uy) = ({u[0]:.6e}, {u[1]:.6e}), "
+                    f"(sxx, syy, sxy) = ({st[0][0]:.4g}, {st[1][1]:.4g}, {st[0][1]:.4g})",
                 )
             )
             if "fe_displacement" in pr:
@@ -264,8 +331,8 @@ def _print_summary(sc, d: dict, written: list[Path]) -> None:
                 rows.append(
                     (
                         "  FE",
-                        f"u = ({fu[0]:.6e}, {fu[1]:.6e}), "
-                        f"s = ({fs[0][0]:.4g}, {fs[1][1]:.4g}, {fs[0][1]:.4g})",
+                        f"(ux, uy) = ({fu[0]:.6e}, {fu[1]:.6e}), "
+                        f"(sxx, syy, sxy) = ({fs[0][0]:.4g}, {fs[1][1]:.4g}, {fs[0][1]:.4g})",
                     )
                 )
     for name, rec in d.get("part_stress", {}).items():
@@ -278,6 +345,7 @@ def _print_summary(sc, d: dict, written: list[Path]) -> None:
             fe_ = rec["fe"]
             txt += f" (FE {fe_['max_sxx']:.4g}, {fe_['max_syy']:.4g}, {fe_['max_principal']:.4g})"
         rows.append((f"stress on {name}", txt))
+    rows += [(f"check: {c['name']}", _check_text(c)) for c in d.get("checks", [])]
     rows.append(("files", ", ".join(str(w) for w in written) or "none"))
     width = max(len(k) for k, _ in rows)
     for k, v in rows:
@@ -304,8 +372,10 @@ def _run_scripts(names: list[Path], extra: list[str], args) -> int:
 
     failed = []
     bar = tqdm(names, desc="scripts", unit="script", disable=not _show_progress(args))
-    for path in bar:
+    for i, path in enumerate(bar):
         bar.set_postfix_str(path.stem)
+        if not args.quiet and bar.disable:  # no bar (not a terminal): a line per script
+            print(f"[{i + 1}/{len(names)}] {path.stem} ...", file=sys.stderr, flush=True)
         proc = subprocess.run(
             [sys.executable, str(path), *extra], capture_output=True, text=True, check=False
         )
@@ -345,15 +415,28 @@ def _bench(args: argparse.Namespace) -> int:
     return _run_scripts(scripts, ["--quick"] if args.quick else [], args)
 
 
+def _help_text() -> str:
+    """The module docstring without its reST markup (``::`` and the indent)."""
+    lines = [ln for ln in __doc__.strip().splitlines() if ln.strip() != "::"]
+    return "\n".join(ln[4:] if ln.startswith("    ") else ln for ln in lines)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
-        prog="dvstatic", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+        prog="dvstatic",
+        description=_help_text(),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"dvstatic {__version__}")
     parser.add_argument("-v", "--verbose", action="store_true", help="log progress details")
+    verbose = argparse.ArgumentParser(add_help=False)  # -v after the command, too
+    verbose.add_argument(
+        "-v", "--verbose", dest="verbose_here", action="store_true", help="log progress details"
+    )
     sub = parser.add_subparsers(dest="command")
-
-    p_run = sub.add_parser("run", help="solve a scene file and write its outputs")
+    p_run = sub.add_parser(
+        "run", parents=[verbose], help="solve a scene file and write its outputs"
+    )
     p_run.add_argument("scene", help="scene file (TOML), see docs/scenes.md")
     p_run.add_argument("--out", help="output folder (default: <scene name>-out)")
     p_run.add_argument(
@@ -368,7 +451,9 @@ def main(argv: list[str] | None = None) -> int:
     p_run.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
     p_run.set_defaults(func=_run)
 
-    p_val = sub.add_parser("validate", help="run the validation scripts (paper figures 4-10)")
+    p_val = sub.add_parser(
+        "validate", parents=[verbose], help="run the validation scripts (paper figures 4-10)"
+    )
     p_val.add_argument("--quick", action="store_true", help="CI sizes (seconds each)")
     p_val.add_argument("--only", help="comma-separated list, e.g. fig05,fig10,elastica")
     p_val.add_argument("--dir", help="folder of the validation scripts")
@@ -376,13 +461,13 @@ def main(argv: list[str] | None = None) -> int:
     p_val.add_argument("-q", "--quiet", action="store_true", help="no progress, no tables")
     p_val.set_defaults(func=_validate)
 
-    p_bench = sub.add_parser("bench", help="run the benchmarks")
+    p_bench = sub.add_parser("bench", parents=[verbose], help="run the benchmarks")
     p_bench.add_argument("--quick", action="store_true", help="small sizes only")
     p_bench.add_argument("--dir", help="folder of the benchmark scripts")
     p_bench.add_argument("-q", "--quiet", action="store_true", help="no progress, no tables")
     p_bench.set_defaults(func=_bench)
 
-    demo = sub.add_parser("demo", help="solve paper exp. 3 and print a table")
+    demo = sub.add_parser("demo", parents=[verbose], help="solve paper exp. 3 and print a table")
     demo.add_argument(
         "--h",
         type=float,
@@ -393,10 +478,13 @@ def main(argv: list[str] | None = None) -> int:
     demo.set_defaults(func=_demo)
 
     args = parser.parse_args(argv)
+    args.verbose = args.verbose or getattr(args, "verbose_here", False)
     logging.basicConfig(
         level=logging.INFO if args.verbose else logging.WARNING,
         format="%(levelname)s %(name)s: %(message)s",
     )
+    for handler in logging.getLogger().handlers:  # the CLI says it once, at the end
+        handler.addFilter(lambda record: not getattr(record, "best_effort", False))
     if not getattr(args, "command", None):
         parser.print_help()
         return 2

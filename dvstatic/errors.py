@@ -91,13 +91,25 @@ class ConvergenceError(SolverError):
     state : ndarray, shape (2N,), or None
         The last iterate (interleaved dofs): ``best_effort`` returns it.
     load_factor : float
-        The load factor that ``state`` is in equilibrium with (1 for linear solves).
+        The load factor ``state`` belongs to (1 for linear solves).
+    equilibrium : bool
+        True if ``state`` is a converged load step (in equilibrium with
+        ``load_factor`` times the load); False if it is the last iterate of a step that
+        did not converge (Newton, when no load step converged).
     """
 
-    def __init__(self, message: str, info: Any = None, state=None, load_factor: float = 1.0):
+    def __init__(
+        self,
+        message: str,
+        info: Any = None,
+        state=None,
+        load_factor: float = 1.0,
+        equilibrium: bool = False,
+    ):
         super().__init__(message, info)
         self.state = state
         self.load_factor = float(load_factor)
+        self.equilibrium = bool(equilibrium)
 
 
 class MissingDependencyError(ImportError):

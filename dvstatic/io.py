@@ -10,6 +10,8 @@ on first use.
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 import logging
 import os
@@ -20,7 +22,7 @@ import numpy as np
 from .errors import InputError
 from .fem import compare
 from .mesh import Mesh
-from .mesh.locate import interpolate
+from .mesh.locate import interpolate, snap_point
 
 log = logging.getLogger(__name__)
 
@@ -68,10 +70,14 @@ def read_mesh(path: str | Path) -> Mesh:
     path = Path(path)
     if not path.is_file():
         raise InputError(f"mesh file not found: {path}", "path")
+    said = io.StringIO()  # meshio prints its own errors: keep them off the terminal
     try:
-        m = meshio.read(path)
+        with contextlib.redirect_stdout(said), contextlib.redirect_stderr(said):
+            m = meshio.read(path)
     except (Exception, SystemExit) as exc:  # meshio raises many types, even SystemExit
-        raise InputError(f"cannot read mesh file {path}: {exc}", "path") from None
+        why = " ".join(said.getvalue().split()).removeprefix("Error: ")
+        why = why or (str(exc) if not isinstance(exc, SystemExit) else "unknown format")
+        raise InputError(f"cannot read mesh file {path}: {why}", "path") from None
     pts = np.asarray(m.points, dtype=float)
     if pts.shape[1] == 3:
         if np.any(np.abs(pts[:, 2]) > 1e-12 * max(1.0, np.abs(pts[:, :2]).max())):
@@ -164,21 +170,20 @@ def nodal_field(solution, name: str, stress: str | None = None) -> np.ndarray:
 
 
 def write_vtu(path: str | Path, solution, stress: bool = True) -> Path:
-    """Write a solution as VTU (ParaView), atomically.
+    """Write a solution's continuum fields as VTU (ParaView), atomically.
 
-    Content: 3-D points (z = 0); cells: the triangles and the bonds (as lines);
-    point data ``displacement`` (N, 3) and, with ``stress``, ``stress`` (N, 9: the
-    default recovery of :meth:`Solution.stress` as a 3x3 tensor, ``szz`` included in
-    plane strain) and ``stress_virial`` (N, 9, the lattice's force-based stress per
-    Voronoi cell); cell data ``tension`` (bond tension on line cells, 0 on triangles)
-    and ``area`` (triangle area, 0 on lines).
+    Content: 3-D points (z = 0) and the triangles; point data ``displacement`` (N, 3)
+    and, with ``stress``, ``stress`` (N, 9: a 3x3 tensor, which ParaView recognises, of
+    the default recovery of :meth:`Solution.stress`; ``szz`` is its out-of-plane
+    component, nonzero in plane strain), ``stress_virial`` (N, 9: the lattice's
+    force-based stress per Voronoi cell) and ``von_mises`` (N,); cell data ``area``
+    (triangle area) and ``material`` (0: the base material, i: the i-th of
+    ``model.materials``). The bonds and their tensions are in :func:`write_bonds_vtu`.
     """
     import meshio
 
     path = Path(path)
     mesh = solution.model.mesh
-    pts = np.c_[mesh.points, np.zeros(mesh.n_points)]
-    bonds = mesh.topology.bonds
     point_data = {"displacement": np.c_[solution.u, np.zeros(mesh.n_points)]}
     if stress:
         for key, method in (("stress", None), ("stress_virial", "virial")):
@@ -187,24 +192,51 @@ def write_vtu(path: str | Path, solution, stress: bool = True) -> Path:
             t9[:, [0, 1, 3, 4]] = s.reshape(-1, 4)
             t9[:, 8] = _szz(solution, s)
             point_data[key] = t9
-    tension = solution.tension()
+        point_data["von_mises"] = nodal_field(solution, "von_mises")
     cell_data = {
-        "tension": [np.zeros(mesh.n_triangles), tension],
-        "area": [np.asarray(mesh.triangle_areas), np.zeros(len(bonds))],
+        "area": [np.asarray(mesh.triangle_areas, dtype=float)],
+        "material": [np.asarray(solution.model.material_of_triangle, dtype=np.int32)],
     }
     out = meshio.Mesh(
-        pts,
-        [("triangle", mesh.triangles), ("line", bonds)],
+        np.c_[mesh.points, np.zeros(mesh.n_points)],
+        [("triangle", mesh.triangles)],
         point_data=point_data,
         cell_data=cell_data,
     )
+    return _write_meshio(path, out)
+
+
+def write_bonds_vtu(path: str | Path, solution) -> Path:
+    """Write the lattice's bonds as VTU line cells, atomically: point data
+    ``displacement`` (N, 3), cell data ``tension`` (force; positive in tension) and
+    ``length`` (undeformed bond length)."""
+    import meshio
+
+    path = Path(path)
+    mesh = solution.model.mesh
+    bonds = mesh.topology.bonds
+    d = mesh.points[bonds[:, 1]] - mesh.points[bonds[:, 0]]
+    out = meshio.Mesh(
+        np.c_[mesh.points, np.zeros(mesh.n_points)],
+        [("line", bonds)],
+        point_data={"displacement": np.c_[solution.u, np.zeros(mesh.n_points)]},
+        cell_data={"tension": [solution.tension()], "length": [np.hypot(d[:, 0], d[:, 1])]},
+    )
+    return _write_meshio(path, out)
+
+
+def _write_meshio(path: Path, out) -> Path:
+    import meshio
+
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = atomic_path(path)
     meshio.write(tmp, out, file_format="vtu")
     return _finish(tmp, path)
 
 
-def summary(solution, fe=None, probes=None, part_stress=()) -> dict:
+def summary(
+    solution, fe=None, probes=None, part_stress=(), stress: str | None = None, checks=()
+) -> dict:
     """JSON-ready summary of a solution (and of an FE comparison, if given).
 
     Parameters
@@ -213,13 +245,20 @@ def summary(solution, fe=None, probes=None, part_stress=()) -> dict:
     fe : FESolution, optional
         Reference on the same mesh; adds relative L2 and max differences.
     probes : array_like, shape (n, 2), optional
-        Points where displacement and stress (lattice and FE) are reported.
+        Points where displacement and stress (lattice and FE) are reported; a point
+        outside the mesh within half the local spacing of a node (on a curved boundary) is
+        moved to that node.
     part_stress : sequence of str
         Boundary parts whose nodal stress extremes are reported (max/min of sxx,
         syy and of the largest principal stress over the part's nodes): the default
         recovery of :meth:`Solution.stress` (``lattice``), the virial stress
         (``lattice_virial``, high at surfaces) and, with ``fe``, the FE stress at the same
         nodes.
+    stress : str, optional
+        Stress recovery of the probes, the checks and ``lattice`` (see
+        :meth:`Solution.stress`; None: its default).
+    checks : sequence of dict
+        Key numbers against references (see :func:`check_values`).
     """
     info = solution.info
     out = {
@@ -233,16 +272,82 @@ def summary(solution, fe=None, probes=None, part_stress=()) -> dict:
         out["strain_energy"] = solution.energy()
     else:
         out["solver"]["steps"] = len(info.steps)
-    stress = solution.stress() if (probes is not None and len(probes)) or part_stress else None
-    p = None
+        out["solver"]["cutbacks"] = info.cutbacks
+    method = stress
+    stress = None
+    if (probes is not None and len(probes)) or part_stress:
+        stress = solution.stress(method)
     if probes is not None and len(probes):
+        mesh = solution.model.mesh
         p = np.asarray(probes, dtype=float).reshape(-1, 2)
+        p = np.concatenate([snap_point(mesh, q[None]) for q in p])
         out["probes"] = _probes(solution, stress, p, fe)
+        out["probes"]["stress_recovery"] = method or "default"
     if part_stress:
         out["part_stress"] = _part_stress(solution, stress, part_stress, fe)
+    if checks:
+        out["checks"] = check_values(solution, checks, stress=method, fe=fe)
     if fe is not None:
         out["fe"] = _fe_summary(solution, fe)
     return out
+
+
+def check_values(solution, checks, stress: str | None = None, fe=None) -> list[dict]:
+    """Key numbers of a solution against reference values.
+
+    Parameters
+    ----------
+    solution : Solution
+    checks : sequence of dict
+        Each with ``name``, ``at`` (point, length), ``quantity`` (``ux``, ``uy``,
+        ``|u|``, ``sxx``, ``syy`` or ``sxy``) and ``reference``; optional ``source``.
+        A point outside the mesh but within half the local spacing of a node (a point on a
+        curved boundary) takes that node's value.
+    stress : str, optional
+        Stress recovery (see :meth:`Solution.stress`).
+    fe : FESolution, optional
+        Adds the FE value at the same point.
+
+    Returns
+    -------
+    list of dict
+        The check with ``value``, ``difference`` (relative to ``|reference|``, or
+        absolute where the reference is 0) and, with ``fe``, ``fe_value`` and
+        ``fe_difference``.
+    """
+    mesh = solution.model.mesh
+    out = []
+    for c in checks:
+        point = np.asarray(c["at"], dtype=float).reshape(1, 2)
+        value = float(
+            _value_at(mesh, nodal_field(solution, c["quantity"], stress), point, c["name"])
+        )
+        rec = dict(c, at=point[0].tolist(), value=value)
+        rec["difference"] = _difference(value, c["reference"])
+        if fe is not None:
+            rec["fe_value"] = _fe_value(fe, c["quantity"], snap_point(mesh, point))
+            rec["fe_difference"] = _difference(rec["fe_value"], c["reference"])
+        out.append(rec)
+    return out
+
+
+def _difference(value: float, reference: float) -> float:
+    return (value - reference) / abs(reference) if reference != 0 else value - reference
+
+
+def _value_at(mesh: Mesh, field: np.ndarray, point: np.ndarray, name: str) -> float:
+    try:
+        return float(interpolate(mesh, field, snap_point(mesh, point))[0])
+    except InputError as exc:
+        raise InputError(f"check {name!r}: {exc}", "at") from None
+
+
+def _fe_value(fe, quantity: str, point: np.ndarray) -> float:
+    if quantity in ("ux", "uy", "|u|"):
+        u = fe.evaluate(point)[0]
+        return float({"ux": u[0], "uy": u[1], "|u|": np.hypot(*u)}[quantity])
+    s = fe.stress(point)[0]
+    return float({"sxx": s[0, 0], "syy": s[1, 1], "sxy": 0.5 * (s[0, 1] + s[1, 0])}[quantity])
 
 
 def _mesh_summary(mesh: Mesh) -> dict:
@@ -295,6 +400,20 @@ def _solver_summary(info) -> dict:
         "reused": list(info.reused),
         "n_dof": info.n_dof,
     }
+    out["load_factor"] = info.load_factor
+    if not info.converged:
+        out["failure"] = info.failure
+        out["equilibrium"] = info.equilibrium
+    if info.steps:  # Newton: the history of every accepted load step
+        out["newton_steps"] = [
+            {
+                "load_factor": st.load_factor,
+                "iterations": st.iterations,
+                "residuals": list(st.residuals),
+                "tolerance": st.tolerance,
+            }
+            for st in info.steps
+        ]
     if info.parallel is not None:
         out["parallel"] = info.parallel.as_dict()
     return out
@@ -395,6 +514,23 @@ def _plain(o):
     raise TypeError(f"not JSON serialisable: {type(o).__name__}")
 
 
+def default_scale(solution) -> float:
+    """Displacement magnification of pictures: the largest displacement drawn as 10 %
+    of the body size (1 for nonlinear solutions, and where nothing moves)."""
+    size = float(np.max(np.ptp(solution.model.mesh.points, axis=0)))
+    umax = solution.max_displacement
+    return 1.0 if solution.info.nonlinear or umax == 0 else 0.1 * size / umax
+
+
+def figure_size(drawn: np.ndarray) -> tuple[float, float]:
+    """Figure size (inches) that frames the drawn points (shape (N, 2)) at equal axis
+    scales, with room for the colour bar: at most 9 x 9, at least 3 high."""
+    lo, hi = drawn.min(axis=0), drawn.max(axis=0)
+    aspect = (hi[1] - lo[1]) / max(hi[0] - lo[0], 1e-300)
+    width = 9.0 if aspect <= 1.0 else max(5.0, min(9.0, 8.0 / aspect + 2.0))
+    return width, max(3.0, min(9.0, (width - 2.0) * aspect + 1.5))
+
+
 def write_png(
     path: str | Path,
     solution,
@@ -405,8 +541,10 @@ def write_png(
 ) -> Path:
     """Picture of the deformed mesh coloured by a nodal field, atomically.
 
-    ``scale`` magnifies the displacement (default: largest displacement drawn as 10 %
-    of the mesh size; 1 for nonlinear solutions).
+    ``scale`` magnifies the displacement (default: the largest displacement drawn as
+    10 % of the mesh size; 1 for nonlinear solutions). The x label states the
+    magnification; the colour range is clipped to robust percentiles where a few nodes
+    would take all of it (the colour bar says so).
     """
     from . import plot
 
@@ -414,14 +552,14 @@ def write_png(
     mesh = solution.model.mesh
     f = nodal_field(solution, field, stress)
     if scale is None:
-        size = float(np.max(np.ptp(mesh.points, axis=0)))
-        umax = solution.max_displacement
-        scale = 1.0 if solution.info.nonlinear or umax == 0 else 0.1 * size / umax
-    lo, hi = mesh.points.min(axis=0), mesh.points.max(axis=0)
-    aspect = (hi[1] - lo[1]) / max(hi[0] - lo[0], 1e-300)
-    fig, axes = plot.figure(1, 1, (9.0, max(3.0, min(9.0, 9.0 * aspect + 1.0))))
-    plot.draw_deformed(axes[0, 0], mesh, solution.u, scale=scale, field=f, label=field)
-    axes[0, 0].set_title(title or f"{solution.model.kind}: {field}, displacement x {scale:.3g}")
+        scale = default_scale(solution)
+    # frame the deformed body (a large deflection can leave the undeformed box)
+    fig, axes = plot.figure(1, 1, figure_size(mesh.points + scale * solution.u))
+    ax = axes[0, 0]
+    plot.draw_deformed(ax, mesh, solution.u, scale=scale, field=f, label=field)
+    ax.set_title(title or f"{solution.model.kind}: {field}")
+    ax.set_xlabel(f"x   (deformed shape, displacements drawn x {scale:.3g})")
+    ax.set_ylabel("y")
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = atomic_path(path).with_suffix(".png")
     plot.save(fig, tmp)

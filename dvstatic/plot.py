@@ -63,17 +63,44 @@ def draw_deformed(
     cmap: str = "viridis",
     edges: bool = True,
 ):
-    """Deformed mesh ``x + scale u`` coloured by a nodal ``field`` (default ``|u|``)."""
+    """Deformed mesh ``x + scale u`` coloured by a nodal ``field`` (default ``|u|``).
+
+    The colour range is clipped to the 1st-99th percentiles of the field when the
+    extremes reach far beyond them (stress peaks under point loads would otherwise spend
+    the whole range on a few nodes); the colour bar then says so and shows arrows.
+    """
     plt = pyplot()
     u = np.asarray(u, dtype=float).reshape(-1, 2)
     p = mesh.points + scale * u
     f = np.hypot(u[:, 0], u[:, 1]) if field is None else np.asarray(field, dtype=float)
-    tpc = ax.tripcolor(p[:, 0], p[:, 1], mesh.triangles, f, shading="gouraud", cmap=cmap)
+    vmin, vmax, extend = robust_range(f)
+    tpc = ax.tripcolor(
+        p[:, 0], p[:, 1], mesh.triangles, f, shading="gouraud", cmap=cmap, vmin=vmin, vmax=vmax
+    )
     if edges and mesh.n_points <= 20000:
         draw_mesh(ax, mesh, p, colors="k", linewidths=0.15, alpha=0.5)
-    plt.colorbar(tpc, ax=ax, label=label, shrink=0.8)
+    if extend != "neither":
+        label += " (colours clipped to the 1-99 % percentiles)"
+    plt.colorbar(tpc, ax=ax, label=label, shrink=0.8, extend=extend)
     ax.set_aspect("equal")
     return ax
+
+
+def robust_range(f: np.ndarray, spread: float = 3.0) -> tuple[float, float, str]:
+    """Colour limits of a field: its 1st and 99th percentiles where the minimum or
+    maximum lies more than ``spread - 1`` times that span beyond them, else the extremes.
+
+    Returns ``(vmin, vmax, extend)`` with ``extend`` for the colour bar.
+    """
+    lo, hi = float(np.min(f)), float(np.max(f))
+    p1, p99 = (float(v) for v in np.percentile(f, [1.0, 99.0]))
+    span = max(p99 - p1, 1e-300)
+    cut_lo = p1 - lo > (spread - 1.0) * span
+    cut_hi = hi - p99 > (spread - 1.0) * span
+    extend = {(False, False): "neither", (True, False): "min", (False, True): "max"}.get(
+        (cut_lo, cut_hi), "both"
+    )
+    return (p1 if cut_lo else lo), (p99 if cut_hi else hi), extend
 
 
 def draw_beam_setup(ax, length: float, height: float, body_force: float = -1.0):

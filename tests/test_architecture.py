@@ -231,6 +231,7 @@ PUBLIC = [
     "fem.lame_plane_stress",
     "io.read_mesh",
     "io.write_vtu",
+    "io.write_bonds_vtu",
     "io.write_json",
     "io.write_png",
     "io.summary",

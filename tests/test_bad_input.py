@@ -131,7 +131,7 @@ CASES = [
         ValueError,
         "conflicting supports",
     ),
-    ("fix where wrong type", lambda: dv.Fix(3.5), TypeError, "part name or an index array"),
+    ("fix where wrong type", lambda: dv.Fix(3.5), TypeError, "part name, an index array or At"),
     (
         "load in supports",
         lambda: dv.solve(dv.DV(_lattice(), 1e5, 0.2), [dv.BodyForce((0, 1))], []),

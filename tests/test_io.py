@@ -19,21 +19,27 @@ def solution():
 
 
 def test_vtu_round_trip(solution, tmp_path):
+    """Continuum fields on the triangles, bonds in their own file: no padded zeros (a
+    new user found ``tension`` 0 on every triangle and ``area`` 0 on every line)."""
     path = io.write_vtu(tmp_path / "s.vtu", solution)
     back = meshio.read(path)
     mesh = solution.model.mesh
     np.testing.assert_allclose(back.points[:, :2], mesh.points)
     assert np.all(back.points[:, 2] == 0)
-    tri = next(c.data for c in back.cells if c.type == "triangle")
-    lines = next(c.data for c in back.cells if c.type == "line")
-    np.testing.assert_array_equal(tri, mesh.triangles)
-    np.testing.assert_array_equal(lines, mesh.topology.bonds)
+    assert [c.type for c in back.cells] == ["triangle"]
+    np.testing.assert_array_equal(back.cells[0].data, mesh.triangles)
     np.testing.assert_allclose(back.point_data["displacement"][:, :2], solution.u)
-    blocks = [c.type for c in back.cells]
-    tension = back.cell_data["tension"][blocks.index("line")]
-    np.testing.assert_allclose(tension, solution.tension())
+    np.testing.assert_allclose(back.cell_data["area"][0], mesh.triangle_areas)
+    assert set(back.cell_data) == {"area", "material"}
     s9 = back.point_data["stress"].reshape(-1, 3, 3)
     np.testing.assert_allclose(s9[:, :2, :2], solution.stress())
+    assert back.point_data["von_mises"].shape == (mesh.n_points,)
+
+    bonds = meshio.read(io.write_bonds_vtu(tmp_path / "s_bonds.vtu", solution))
+    assert [c.type for c in bonds.cells] == ["line"]
+    np.testing.assert_array_equal(bonds.cells[0].data, mesh.topology.bonds)
+    np.testing.assert_allclose(bonds.cell_data["tension"][0], solution.tension())
+    assert np.all(bonds.cell_data["length"][0] > 0)
     assert not list(tmp_path.glob(".*tmp"))  # no temporary file left behind
 
 
@@ -169,3 +175,44 @@ def test_reactions_per_prescribed_component_without_double_counting(tmp_path):
     assert r["left"]["x"] == pytest.approx(r["total"][0], rel=1e-12)
     assert r["bottom"]["y"] == pytest.approx(r["total"][1], rel=1e-12)
     assert r["left"]["x"] == pytest.approx(-1.0, rel=1e-9)
+
+
+def test_unreadable_mesh_file_is_one_clear_line(tmp_path, capsys):
+    """meshio printed its own "Error: ..." lines and the message ended in ": 1" (an exit
+    status): now one line, nothing from meshio on the terminal."""
+    from dvstatic import cli
+
+    (tmp_path / "bad.msh").write_text("garbage\n")
+    scene = tmp_path / "s.toml"
+    scene.write_text(
+        '[mesh]\ntype = "file"\npath = "bad.msh"\n[material]\nE = 1e5\nnu = 0.2\n'
+        '[[supports]]\nwhere = "left"\n'
+    )
+    code = cli.main(["run", str(scene), "--quiet"])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == ""
+    assert len(err.strip().splitlines()) == 1
+    assert err.startswith("error: ") and "mesh.path" in err and "bad.msh" in err
+    assert not err.rstrip().endswith(": 1") and "Error:" not in err
+
+
+def test_pictures_frame_the_deformed_body_and_clip_colour_peaks():
+    """The large-deflection cantilever was drawn in a frame of its undeformed box (left
+    half empty, the beam squeezed); the Brazilian disc's colour range went to the load
+    points. Frames follow the deformed body; colours clip to robust percentiles."""
+    from dvstatic import plot
+
+    straight = np.c_[np.linspace(0, 10, 50), np.linspace(0, 0.5, 50)]
+    curled = np.c_[6 * np.sin(np.linspace(0, 1.2, 50)), -7 * np.linspace(0, 1, 50) ** 2]
+    w, h = io.figure_size(straight)
+    assert w == 9.0 and h == 3.0
+    w, h = io.figure_size(curled)
+    assert h > w  # taller than wide, as the deformed beam is
+    rng = np.random.default_rng(0)
+    f = rng.normal(0.0, 1.0, 2000)
+    assert plot.robust_range(f)[2] == "neither"  # no peaks: the full range
+    f[:5] = -400.0  # five nodes under a point load
+    vmin, vmax, extend = plot.robust_range(f)
+    assert extend == "min" and vmin > -4.0 and vmax == f.max()
+    f[:5] = 9.0  # a stress concentration of about twice the range: shown, not clipped
+    assert plot.robust_range(f)[2] == "neither"

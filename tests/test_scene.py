@@ -289,3 +289,23 @@ def test_profiles_and_hydrostatic_pressure(tmp_path):
     sol = dv.solve(sc.build_model(mesh), sc.build_supports(mesh), sc.build_loads(mesh))
     left = mesh.part_nodes("left")
     np.testing.assert_allclose(sol.u[left, 0], 0.01 * mesh.points[left, 1], atol=1e-15)
+
+
+def test_output_probes_are_checked_before_the_solve(tmp_path, capsys, monkeypatch):
+    """A probe outside the mesh used to be found after the whole solve (16 s), with no
+    key; it is now refused before solving, naming output.probes[i]."""
+    from dvstatic import cli, solvers
+
+    def no_solve(*a, **k):
+        raise AssertionError("solve() ran before the outputs were checked")
+
+    monkeypatch.setattr(solvers, "solve", no_solve)
+    path = write(tmp_path, GOOD)
+    code = cli.main(
+        ["run", str(path), "--set", "output.probes=[[0.5, 0.5], [5.0, 0.5]]", "--quiet"]
+    )
+    err = capsys.readouterr().err
+    assert code == 2
+    assert "output.probes[1]" in err and "outside the mesh" in err
+    code = cli.main(["run", str(path), "--set", 'output.part_stress=["rim"]', "--quiet"])
+    assert code == 2 and "output.part_stress[0]" in capsys.readouterr().err

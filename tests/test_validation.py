@@ -126,3 +126,26 @@ def test_convergence_quick(out):
             # the defaults beat the paper's model on these (a factor 3 or more)
             assert last["DV"]["error"] < last["DV paper"]["error"] / 3
     assert (out / "convergence_quick.png").stat().st_size > 1000
+
+
+def test_quick_runs_never_write_the_committed_results():
+    """`dvstatic validate --quick` overwrote the committed full-size JSON in
+    validation/out (fig09 went from 7,590 to 1,956 nodes): every script's command line
+    now sends --quick output to validation/out/quick (ignored by git) unless --out says."""
+    sys.path.insert(0, str(VALIDATION))
+    try:
+        import _common
+
+        out = VALIDATION / "out"
+        p = _common.parser("doc")
+        assert p.parse_args([]).out == out
+        assert p.parse_args(["--quick"]).out == out / "quick"
+        assert p.parse_args(["--quick", "--out", "x"]).out == Path("x")
+    finally:
+        sys.path.remove(str(VALIDATION))
+    for script in sorted(VALIDATION.glob("*.py")):
+        text = script.read_text()
+        if "--quick" in text and not script.name.startswith("_"):
+            # one command line for all: their own parsers wrote quick runs into out/
+            assert "parser(__doc__)" in text, script.name
+            assert "ArgumentParser(" not in text, script.name

@@ -18,10 +18,30 @@ E_BEAM, NU_BEAM = 1e5, 0.2
 BEAM_L, BEAM_H = 4.0, 1.0
 
 
+#: where ``--quick`` runs write (ignored by git): the committed full-size results in
+#: ``OUT`` change only when a full-size run is made on purpose
+QUICK_OUT = OUT / "quick"
+
+
+class _Parser(argparse.ArgumentParser):
+    def parse_args(self, args=None, namespace=None):
+        a = super().parse_args(args, namespace)
+        if a.out is None:
+            a.out = QUICK_OUT if a.quick else OUT
+        return a
+
+
 def parser(doc: str) -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(description=doc, formatter_class=argparse.RawTextHelpFormatter)
+    """The scripts' command line: ``--quick`` (CI size) and ``--out`` (a folder; default
+    ``validation/out``, or ``validation/out/quick`` with ``--quick``)."""
+    p = _Parser(description=doc, formatter_class=argparse.RawTextHelpFormatter)
     p.add_argument("--quick", action="store_true", help="CI size (seconds)")
-    p.add_argument("--out", type=Path, default=OUT, help="output folder (default validation/out)")
+    p.add_argument(
+        "--out",
+        type=Path,
+        default=None,
+        help="output folder (default validation/out; validation/out/quick with --quick)",
+    )
     return p
 
 

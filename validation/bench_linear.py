@@ -23,11 +23,9 @@ import resource
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
-
-OUT = Path(__file__).resolve().parent / "out"
+from _common import parser
 
 
 def _peak_mb() -> float:
@@ -132,12 +130,10 @@ def _child(args: list[str]) -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
+    p = parser(__doc__)
     p.add_argument("--nodes", type=float, nargs="+", default=[1e4, 1e5, 1e6])
-    p.add_argument("--quick", action="store_true", help="1e4 and 3e4 nodes")
     p.add_argument("--direct-max", type=float, default=3e5, help="largest mesh for direct solve")
     p.add_argument("--model", choices=["DV", "RV"], default="DV")
-    p.add_argument("--out", type=Path, default=OUT / "bench_linear.json")
     p.add_argument("--child", choices=["dv", "skfem"], help=argparse.SUPPRESS)
     a = p.parse_args(argv)
     if a.child == "dv":
@@ -167,11 +163,12 @@ def main(argv: list[str] | None = None) -> int:
         )
         rows.append(rec)
         _print_row(rec, header=len(rows) == 1)
-    a.out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = a.out.with_suffix(".json.tmp")
+    path = a.out / "bench_linear.json"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(".json.tmp")
     tmp.write_text(json.dumps({"benchmark": "bench_linear", "rows": rows}, indent=2))
-    tmp.replace(a.out)
-    print(f"wrote {a.out}")
+    tmp.replace(path)
+    print(f"wrote {path}")
     return 0
 
 

@@ -27,17 +27,15 @@ Writes ``validation/out/elastica.json`` and prints tables.
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
+from _common import parser
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-OUT = Path(__file__).resolve().parent / "out"
 LENGTH, HEIGHT, E, NU = 10.0, 0.5, 1e5, 0.2
 ALPHAS = (1.0, 2.0, 5.0, 10.0)
 
@@ -172,18 +170,17 @@ def print_table(data: dict) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
-    p.add_argument("--quick", action="store_true", help="16 rows only")
+    p = parser(__doc__)
     p.add_argument("--rows", type=int, nargs="+", default=[8, 16, 32])
-    p.add_argument("--out", type=Path, default=OUT / "elastica.json")
     a = p.parse_args(argv)
     data = run([16] if a.quick else a.rows)
     print_table(data)
-    a.out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = a.out.with_suffix(".tmp")
+    path = a.out / "elastica.json"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(".tmp")
     tmp.write_text(json.dumps(data, indent=2))
-    tmp.replace(a.out)
-    print(f"wrote {a.out}")
+    tmp.replace(path)
+    print(f"wrote {path}")
     return 0
 
 

@@ -17,14 +17,13 @@ Writes ``validation/out/fig04.png`` and ``fig04.json`` and prints a table.
 
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 from pathlib import Path
 
 import numpy as np
+from _common import parser
 
-OUT = Path(__file__).resolve().parent / "out"
 E, NU = 1e7, 0.2
 
 
@@ -89,10 +88,8 @@ def plot(data: dict, path: Path) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
-    p.add_argument("--quick", action="store_true", help="1e4 vertices")
+    p = parser(__doc__)
     p.add_argument("--points", type=int, default=100_000)
-    p.add_argument("--out", type=Path, default=OUT)
     a = p.parse_args(argv)
     data = run(10_000 if a.quick else a.points)
     a.out.mkdir(parents=True, exist_ok=True)

@@ -7,7 +7,7 @@ import numpy as np
 from ..errors import InputError
 from .core import Mesh
 
-__all__ = ["interpolate"]
+__all__ = ["interpolate", "snap_point", "local_spacing"]
 
 
 def interpolate(mesh: Mesh, field, points) -> np.ndarray:
@@ -68,3 +68,40 @@ def interpolate(mesh: Mesh, field, points) -> np.ndarray:
         raise InputError(f"point {bad.tolist()} lies outside the mesh", "points")
     vals = f[mesh.triangles[tri_idx]]  # (n, 3, ...)
     return np.einsum("nv,nv...->n...", bary, vals)
+
+
+def snap_point(mesh: Mesh, point) -> np.ndarray:
+    """``point`` (shape (1, 2)) if it lies in the mesh, else its nearest node when that
+    is within half the local spacing (a point on a curved boundary, which the mesh's
+    straight edges cut inside).
+
+    Raises
+    ------
+    InputError
+        If the point is farther than half the local spacing from the mesh.
+    """
+    point = np.asarray(point, dtype=float).reshape(1, 2)
+    try:
+        interpolate(mesh, np.zeros(mesh.n_points), point)
+        return point
+    except InputError:
+        d = np.hypot(*(mesh.points - point).T)
+        i = int(np.argmin(d))
+        if d[i] > 0.5 * local_spacing(mesh, i):
+            raise InputError(
+                f"point {point[0].tolist()} lies outside the mesh (its nearest node is "
+                f"{d[i]:.3g} away, more than half the local spacing)",
+                "points",
+            ) from None
+        return mesh.points[i : i + 1]
+
+
+def local_spacing(mesh: Mesh, node: int) -> float:
+    """Mean length of the bonds at ``node`` (length): the spacing of a graded mesh
+    there (``mesh.h`` is the mean over the whole mesh)."""
+    b = mesh.topology.bonds
+    at = b[np.any(b == node, axis=1)]
+    if at.size == 0:
+        return float(mesh.h)
+    d = mesh.points[at[:, 1]] - mesh.points[at[:, 0]]
+    return float(np.mean(np.hypot(d[:, 0], d[:, 1])))

@@ -20,7 +20,7 @@ from .loads import (
     load_vector,
     nodal_forces,
 )
-from .select import as_list, select_edges, select_nodes
+from .select import At, as_list, nearest_node, select_edges, select_nodes
 from .supports import Fix, SupportComponent, constraints, support_components
 
 __all__ = [
@@ -29,6 +29,8 @@ __all__ = [
     "Pressure",
     "BodyForce",
     "PointLoad",
+    "At",
+    "nearest_node",
     "LOADS",
     "evaluate",
     "as_list",

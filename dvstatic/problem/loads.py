@@ -18,7 +18,7 @@ from ..errors import InputError
 from ..mesh import Mesh
 from .fields import evaluate, vector_or_callable
 from .select import as_list, label, select_edges, select_nodes, where_ok
-from .supports import Fix
+from .supports import Fix, _at_where
 
 __all__ = [
     "Traction",
@@ -118,16 +118,24 @@ class PointLoad:
 
     Parameters
     ----------
-    nodes : str or array_like of int
-        Part name or node indices (every node receives the full ``value``).
+    nodes : str, array_like of int or At
+        Part name, node indices (every node receives the full ``value``), or
+        :class:`At` (the node nearest to a point).
     value : (fx, fy)
         Force per node (force per unit thickness).
+    at : (x, y), optional
+        Instead of ``nodes``: the node nearest to this point (length), within the
+        local spacing of it (``PointLoad(at=(0.0, 1.0), value=(0.0, -1.0))``).
     """
 
-    nodes: object
-    value: tuple[float, float]
+    nodes: object = None
+    value: tuple[float, float] | None = None
+    at: object = None
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "nodes", _at_where(self.nodes, self.at, "PointLoad"))
+        if self.value is None:
+            raise TypeError("PointLoad: `value` (fx, fy) is required")
         where_ok(self.nodes, "PointLoad")
         object.__setattr__(self, "value", tuple(check_vector2("PointLoad value", self.value)))
 

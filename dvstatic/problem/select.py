@@ -3,22 +3,60 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import InputError
 from ..mesh import Mesh
 
-__all__ = ["as_list", "select_nodes", "select_edges", "where_ok", "label"]
+__all__ = ["At", "as_list", "nearest_node", "select_nodes", "select_edges", "where_ok", "label"]
+
+
+@dataclass(frozen=True)
+class At:
+    """Selects the mesh node nearest to the point ``(x, y)`` (length); it must lie
+    within the local spacing (the mean length of its bonds) of the point. ``Fix(at=(x, y))`` and
+    ``PointLoad(at=(x, y), value=...)`` build one."""
+
+    x: float
+    y: float
+
+    def __post_init__(self) -> None:
+        for name in ("x", "y"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float, np.number)):
+                raise TypeError(f"At.{name} must be a number, got {type(v).__name__}")
+            if not np.isfinite(v):
+                raise InputError(f"At.{name} must be finite, got {v}", "at")
+
+
+def nearest_node(mesh: Mesh, point) -> int:
+    """Index of the node nearest to ``point``; :class:`InputError` if it is farther
+    than the local spacing (the mean length of that node's bonds: a point between two
+    boundary nodes of a coarse part of a graded mesh is still found)."""
+    from ..mesh.locate import local_spacing
+
+    p = np.asarray(point, dtype=float).reshape(2)
+    d = np.hypot(*(mesh.points - p).T)
+    i = int(np.argmin(d))
+    h = local_spacing(mesh, i)
+    if d[i] > h:
+        raise InputError(
+            f"no node near {p.tolist()}: the nearest, {mesh.points[i].tolist()}, is "
+            f"{d[i]:.3g} away (more than the local spacing, {h:.3g})",
+            "at",
+        )
+    return i
 
 
 def where_ok(where, name: str) -> None:
-    if isinstance(where, str):
+    if isinstance(where, (str, At)):
         return
     if isinstance(where, (np.ndarray, Sequence)) and not isinstance(where, (bytes, bytearray)):
         return
     raise TypeError(
-        f"{name}: `where` must be a boundary part name or an index array, "
+        f"{name}: `where` must be a boundary part name, an index array or At(x, y), "
         f"got {type(where).__name__}"
     )
 
@@ -39,6 +77,8 @@ def select_nodes(mesh: Mesh, where, what: str) -> np.ndarray:
     """Node indices (sorted, unique) from a part name or an index array."""
     if isinstance(where, str):
         return mesh.part_nodes(where)
+    if isinstance(where, At):
+        return np.array([nearest_node(mesh, (where.x, where.y))])
     arr = np.asarray(where)
     if arr.size == 0:
         raise InputError(f"{what}: the node selection is empty", "where")
@@ -87,4 +127,6 @@ _GAUSS_W = np.array([0.5, 0.5])
 
 def label(where) -> str:
     """A short description of a selection for messages."""
+    if isinstance(where, At):
+        return f"the node at ({where.x:g}, {where.y:g})"
     return repr(where) if isinstance(where, str) else f"{len(np.asarray(where))} edges"

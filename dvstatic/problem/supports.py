@@ -12,7 +12,7 @@ from ..errors import InputError
 from ..linalg import check_restrained
 from ..mesh import Mesh
 from .fields import evaluate
-from .select import as_list, label, select_nodes, where_ok
+from .select import At, as_list, label, select_nodes, where_ok
 
 __all__ = ["Fix", "SupportComponent", "support_components", "constraints", "check_restrained"]
 
@@ -44,8 +44,8 @@ class Fix:
 
     Parameters
     ----------
-    where : str or array_like of int
-        Part name or node indices.
+    where : str, array_like of int or At
+        Part name, node indices, or :class:`At` (the node nearest to a point).
     x, y : float, array_like, callable or None
         Prescribed ``u_x`` / ``u_y`` (length units): one value, one value per
         selected node (in the order of ``where``: node ``where[i]`` gets value ``i``;
@@ -53,13 +53,18 @@ class Fix:
         position ``g(x) -> (m,)`` for points ``x`` of shape (m, 2) (a prescribed
         displacement field); ``None`` leaves the component free. ``Fix(where)`` with
         neither given clamps both components to zero.
+    at : (x, y), optional
+        Instead of ``where``: the node nearest to this point (length), which must lie
+        within the local spacing of it (``Fix(at=(1.0, 0.0), y=0.0)``).
     """
 
-    where: object
+    where: object = None
     x: object = None
     y: object = None
+    at: object = None
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "where", _at_where(self.where, self.at, "Fix"))
         where_ok(self.where, "Fix")
         x, y = _component(self.x, "x"), _component(self.y, "y")
         if x is None and y is None:
@@ -166,3 +171,17 @@ def constraints(mesh: Mesh, supports) -> tuple[np.ndarray, np.ndarray]:
         )
     keep = np.concatenate([[True], ~same])
     return dofs[keep], vals[keep]
+
+
+def _at_where(where, at, name: str):
+    """``where``, or ``At(*at)`` when only ``at`` is given (exactly one is needed)."""
+    if at is None:
+        if where is None:
+            raise TypeError(f"{name}: give `where` (a part, node indices) or `at=(x, y)`")
+        return where
+    if where is not None:
+        raise TypeError(f"{name}: give `where` or `at`, not both")
+    a = np.asarray(at)
+    if a.shape != (2,):
+        raise InputError(f"{name}: at must be a point (x, y), got shape {a.shape}", "at")
+    return At(float(a[0]), float(a[1]))

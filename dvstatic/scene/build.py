@@ -13,7 +13,8 @@ from ..lattice import DV, RV
 from ..mesh import generators as meshgen
 from ..mesh.domain import Circle, Domain, Polygon, rectangle_domain
 from ..mesh.graded import size_near
-from ..problem import BodyForce, Fix, PointLoad, Pressure, Traction
+from ..mesh.locate import snap_point
+from ..problem import BodyForce, Fix, PointLoad, Pressure, Traction, nearest_node
 from .schema import SOLVER_KEYS, SceneError
 
 __all__ = ["Scene"]
@@ -118,8 +119,10 @@ class Scene:
 
     def _nodes(self, mesh, item: dict, key: str):
         if item.get("at") is not None:
-            d = np.hypot(*(mesh.points - np.asarray(item["at"])).T)
-            return np.array([int(np.argmin(d))])
+            try:
+                return np.array([nearest_node(mesh, item["at"])])
+            except InputError as exc:
+                raise SceneError(self.path, f"{key}.at", str(exc)) from None
         where = item["where"]
         if isinstance(where, str):
             if where not in mesh.parts:
@@ -167,6 +170,33 @@ class Scene:
             else:
                 out.append(PointLoad(self._nodes(mesh, ld, key), tuple(ld["value"])))
         return out
+
+    def check_outputs(self, mesh) -> None:
+        """Check ``[output]`` against the mesh before solving: every probe inside the
+        mesh, every check's point in it (or within half the local spacing of a node), every
+        ``part_stress`` name a boundary part.
+
+        Raises
+        ------
+        SceneError
+            Naming the key (``output.probes[i]``, ``output.part_stress[i]``).
+        """
+        o = self.data["output"]
+        points = [(f"output.probes[{i}]", p) for i, p in enumerate(o["probes"])]
+        points += [(f"output.checks[{i}].at", c["at"]) for i, c in enumerate(o["checks"])]
+        for key, point in points:
+            try:
+                snap_point(mesh, np.asarray(point, dtype=float).reshape(1, 2))
+            except InputError as exc:
+                raise SceneError(self.path, key, str(exc)) from None
+        for i, name in enumerate(o["part_stress"]):
+            if name not in mesh.parts:
+                known = ", ".join(repr(k) for k in mesh.parts)
+                raise SceneError(
+                    self.path,
+                    f"output.part_stress[{i}]",
+                    f"unknown boundary part {name!r}; known parts: {known}",
+                )
 
     def solve_options(self) -> dict:
         """Keyword options of :func:`dvstatic.solve` from ``[solver]``."""

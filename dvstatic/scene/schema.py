@@ -66,6 +66,9 @@ PROFILE_DOC = (
     "along the line from (x0, y0) to (x1, y1) (constant beyond its ends)"
 )
 
+#: quantities an ``[[output.checks]]`` entry can name
+CHECK_QUANTITIES = ("ux", "uy", "|u|", "sxx", "syy", "sxy")
+
 SCHEMA: dict[str, F] = {
     "title": F("string", "free text shown in the summary", default=""),
     "mesh": F(
@@ -271,6 +274,30 @@ SCHEMA: dict[str, F] = {
             "probes": F("points", "points where displacement and stress are reported", default=[]),
             "part_stress": F(
                 "strings", "boundary parts whose nodal stress extremes are reported", default=[]
+            ),
+            "checks": F(
+                "tables",
+                "key numbers printed (and written to the JSON) against a reference value, "
+                "e.g. a closed form: the lattice value, with fe_compare the FE value, and "
+                "their differences from the reference",
+                default=[],
+                schema={
+                    "name": F("string", "what is checked (a label)", required=True),
+                    "at": F(
+                        "point",
+                        "where (length): inside the mesh, or on its boundary within half the "
+                        "local spacing of a node (the node's value is taken)",
+                        required=True,
+                    ),
+                    "quantity": F(
+                        "string",
+                        "displacement or stress component (stress: output.stress recovery)",
+                        required=True,
+                        choices=CHECK_QUANTITIES,
+                    ),
+                    "reference": F("number", "the value to compare with", required=True),
+                    "source": F("string", "where the reference comes from", default=""),
+                },
             ),
         },
     ),

@@ -212,7 +212,9 @@ def solve_nonlinear(
     ------
     ConvergenceError
         A load step failed after every cut-back (``state``, ``load_factor``: the last
-        converged state; for a distributed problem ``state`` holds this rank's dofs).
+        converged state, or the smallest failed step's last iterate when no step
+        converged (``equilibrium`` False); for a distributed problem ``state`` holds this
+        rank's dofs).
     UnstableError
         A converged state is unstable and ``allow_unstable`` is not set.
     """
@@ -237,13 +239,16 @@ def solve_nonlinear(
                 continue
             cutbacks += 1
             if cutbacks > opts.max_cutbacks:
+                # the last converged state; with none, the failed step's last iterate
+                last = u if accepted or not np.all(np.isfinite(u_new)) else u_new
                 raise ConvergenceError(
                     _failure_message(
                         step_no, lam, rec, cutbacks - 1, dlam, opts, description or kind
                     ),
                     _partial(kind, accepted, rec, cutbacks - 1, problem.builds, lam),
-                    state=u.copy(),
-                    load_factor=lam,
+                    state=last.copy(),
+                    load_factor=lam if last is u else target,
+                    equilibrium=last is u,
                 )
             dlam *= 0.5
             log.info("step %d failed (%s); cutting the step to %.3g", step_no, rec.reason, dlam)

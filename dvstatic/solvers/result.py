@@ -16,6 +16,7 @@ import numpy as np
 from ..errors import InputError
 from ..lattice import VoronoiModel
 from ..lattice.stress import node_stress, out_of_plane_stress, strain_stress
+from ..mesh.locate import interpolate, snap_point
 from .recovery import recovered_stress
 
 __all__ = [
@@ -211,6 +212,9 @@ class SolveInfo(_Record):
         The load factor of the returned state (1 when complete).
     failure : str or None
         Why an unconverged state was returned (``best_effort``).
+    equilibrium : bool
+        False when the returned state is the last iterate of a step that did not
+        converge (``best_effort`` when no load step converged).
     failed_step : NewtonStep or None
     linear_solves : tuple of LinearSolve
         The engine's iterative solves (PETSc).
@@ -237,6 +241,7 @@ class SolveInfo(_Record):
     tangent_builds: int = 0
     load_factor: float = 1.0
     failure: str | None = None
+    equilibrium: bool = True
     failed_step: NewtonStep | None = None
     linear_solves: tuple[LinearSolve, ...] = ()
     parallel: ParallelInfo | None = None
@@ -325,6 +330,50 @@ class Solution:
         raise InputError(
             f"unknown stress method {method!r}; accepted: {', '.join(STRESS_METHODS)}", "method"
         )
+
+    def stress_at(self, points, method: str | None = None) -> np.ndarray:
+        """Stress at arbitrary points, shape (n, 2, 2) (force per area): the nodal stress
+        of ``method`` (see :meth:`stress`) interpolated linearly; a point just outside
+        the mesh (on a curved boundary, within half the local spacing of a node) takes that
+        node's value.
+
+        Parameters
+        ----------
+        points : array_like, shape (n, 2) or (2,)
+
+        Raises
+        ------
+        InputError
+            A point outside the mesh.
+        """
+        mesh = self.model.mesh
+        p = np.atleast_2d(np.asarray(points, dtype=float))
+        if p.ndim != 2 or p.shape[1] != 2:
+            raise InputError(f"points must have shape (n, 2), got {p.shape}", "points")
+        p = np.concatenate([snap_point(mesh, q) for q in p])
+        return interpolate(mesh, self.stress(method).reshape(-1, 4), p).reshape(-1, 2, 2)
+
+    def mean_stress(self, region: str | None = None, method: str | None = None) -> np.ndarray:
+        """Area-weighted mean stress over a region of the mesh (None: the whole body),
+        shape (2, 2): the nodal stress of ``method`` integrated with linear shape
+        functions over the region's triangles, divided by their area.
+
+        Raises
+        ------
+        InputError
+            An unknown region name (the known ones are listed).
+        """
+        mesh = self.model.mesh
+        if region is None:
+            tris = np.arange(mesh.n_triangles)
+        elif region in mesh.regions:
+            tris = np.asarray(mesh.regions[region])
+        else:
+            known = ", ".join(repr(k) for k in mesh.regions) or "none"
+            raise InputError(f"unknown region {region!r}; known regions: {known}", "region")
+        s = self.stress(method)[mesh.triangles[tris]].mean(axis=1)  # (m, 2, 2)
+        a = np.asarray(mesh.triangle_areas)[tris]
+        return np.einsum("m,mij->ij", a, s) / a.sum()
 
     def out_of_plane_stress(self, method: str | None = None) -> np.ndarray:
         """``szz`` per node, shape (N,): ``nu (sxx + syy)`` in plane strain (of the

@@ -39,12 +39,13 @@ def solve(model: VoronoiModel, supports=None, loads=None, *, options=None, **kwa
     loads_l = as_list(loads, "Traction, Pressure, BodyForce or PointLoad")
     if opts.solver == "petsc":
         return backends.engine("petsc").solve(model, supports_l, loads_l, opts)
+    t0 = time.perf_counter()
     try:
         return _solve_serial(model, supports_l, loads_l, opts)
     except ConvergenceError as exc:
         if not opts.best_effort or exc.state is None:
             raise
-        return _unconverged(model, supports_l, loads_l, exc, opts)
+        return _unconverged(model, supports_l, loads_l, exc, opts, t0)
 
 
 class _Problem:
@@ -118,7 +119,28 @@ def _solve_serial(model: VoronoiModel, supports: list, loads: list, opts) -> Sol
         info.residual,
         info.seconds.total,
     )
+    if not opts.nonlinear:
+        _warn_large(model.mesh, x.reshape(-1, 2))
     return Solution(model, x.reshape(-1, 2), p.reactions(r_full), info, supports, loads)
+
+
+#: a linear solution whose largest displacement exceeds this fraction of the body's
+#: size is warned about (small-strain theory no longer describes it)
+LARGE_DISPLACEMENT = 0.05
+
+
+def _warn_large(mesh, u: np.ndarray) -> None:
+    size = float(np.max(np.ptp(mesh.points, axis=0)))
+    umax = float(np.max(np.hypot(u[:, 0], u[:, 1])))
+    if umax > LARGE_DISPLACEMENT * size:
+        log.warning(
+            "the largest displacement, %.3g, is %.0f %% of the body's size (%.3g): a linear "
+            "(small-strain) solution does not describe this; solve with nonlinear=True "
+            "(scene: [solver] nonlinear = true)",
+            umax,
+            100 * umax / size,
+            size,
+        )
 
 
 def _relax(model: VoronoiModel, p: _Problem, opts, common: dict):
@@ -189,7 +211,9 @@ def _internal(model: VoronoiModel, x: np.ndarray, K, nonlinear: bool) -> np.ndar
     return model.internal_force(x.reshape(-1, 2)) if nonlinear else K @ x
 
 
-def _unconverged(model, supports: list, loads: list, exc: ConvergenceError, opts) -> Solution:
+def _unconverged(
+    model, supports: list, loads: list, exc: ConvergenceError, opts, t0: float
+) -> Solution:
     """The last state of a failed iteration, marked unconverged (best effort)."""
     mesh = model.mesh
     dofs, _ = constraints(mesh, supports)
@@ -214,9 +238,22 @@ def _unconverged(model, supports: list, loads: list, exc: ConvergenceError, opts
         residual=residual,
         load_factor=exc.load_factor,
         failure=str(exc),
+        equilibrium=exc.equilibrium,
+        seconds=dataclasses.replace(prior.seconds, total=time.perf_counter() - t0),
         coupling_assembled=model.operator.has_coupling,
     )
-    log.warning("best effort: returning an unconverged state (%s)", exc)
+    what = (
+        "the last converged load step"
+        if exc.equilibrium
+        else "the last iterate of a step that did not converge"
+    )
+    log.warning(
+        "best effort: returning %s, load factor %.4g (%s)",
+        what,
+        exc.load_factor,
+        exc,
+        extra={"best_effort": True},
+    )
     return Solution(model, x.reshape(-1, 2), reactions.reshape(-1, 2), info, supports, loads)
 
 

@@ -1,0 +1,69 @@
+#!/usr/bin/env bash
+# A new user's first hour, scripted: clone the repository into a temporary folder, run
+# the README's two set-up commands exactly as written (extracted from README.md, not
+# copied here), run every example, and check what a newcomer would see:
+#   * no output of any command contains "Traceback";
+#   * every example prints its key numbers against their references ("check: ...");
+#   * every example writes its VTU, PNG and JSON.
+#
+# Usage: bash scripts/newcomer.sh [REPOSITORY]   (default: this checkout)
+# Takes about 10 minutes on 2 cores (the test suite is most of it). Exit 0 when all is
+# well; otherwise the failures are listed and the exit status is 1.
+set -uo pipefail
+
+repo="${1:-$(cd "$(dirname "$0")/.." && pwd)}"
+work="$(mktemp -d)"
+trap 'rm -rf "$work"' EXIT
+log="$work/log"
+mkdir -p "$log"
+failures=()
+
+fail() { failures+=("$1"); echo "FAIL: $1"; }
+
+git clone -q "$repo" "$work/dvstatic" || { echo "cannot clone $repo"; exit 1; }
+cd "$work/dvstatic" || exit 1
+
+# the README's bash blocks of the set-up section, in order: install + main job, tests
+mapfile -t commands < <(
+    awk '/^## Set-up/{on=1} /^## /&&!/^## Set-up/{on=0} on&&/^```bash/{b=1;next} on&&/^```/{b=0} b' README.md
+)
+if [ "${#commands[@]}" -ne 2 ]; then
+    fail "the README's set-up section has ${#commands[@]} commands, expected 2"
+fi
+for i in "${!commands[@]}"; do
+    echo "== README command $((i + 1)): ${commands[$i]}"
+    start=$SECONDS
+    if ! bash -c "${commands[$i]}" >"$log/readme$i.txt" 2>&1; then
+        fail "README command $((i + 1)) exited non-zero (see its output below)"
+        tail -20 "$log/readme$i.txt"
+    fi
+    echo "   $((SECONDS - start)) s; last line: $(tail -1 "$log/readme$i.txt")"
+done
+
+export MPLBACKEND=Agg
+for scene in examples/*.toml; do
+    name="$(basename "$scene" .toml)"
+    out="$work/out/$name"
+    start=$SECONDS
+    .venv/bin/dvstatic run "$scene" --out "$out" >"$log/$name.txt" 2>&1
+    code=$?
+    echo "== $name: exit $code, $((SECONDS - start)) s"
+    grep -E "^ *check: " "$log/$name.txt" | sed 's/^ */   /'
+    [ "$code" -eq 0 ] || fail "$name exited with $code"
+    grep -q "check: " "$log/$name.txt" || fail "$name prints no key number against a reference"
+    for ext in vtu png json; do
+        [ -s "$out/$name.$ext" ] || fail "$name wrote no $name.$ext"
+    done
+done
+
+if grep -l "Traceback" "$log"/*.txt >/dev/null 2>&1; then
+    for f in $(grep -l "Traceback" "$log"/*.txt); do fail "Traceback in $(basename "$f")"; done
+fi
+
+if [ "${#failures[@]}" -eq 0 ]; then
+    echo "newcomer run: all well (README commands, ${#commands[@]}; examples, $(ls examples/*.toml | wc -l))"
+    exit 0
+fi
+echo "newcomer run: ${#failures[@]} failure(s):"
+printf '  %s\n' "${failures[@]}"
+exit 1

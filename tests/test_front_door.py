@@ -1,0 +1,95 @@
+"""What a new user meets first: the command line's help and messages, supports and
+loads at a point, stresses at points and over regions (issue 16)."""
+
+import numpy as np
+import pytest
+
+import dvstatic as dv
+from dvstatic import cli
+
+E, NU = 1e5, 0.3
+
+
+@pytest.fixture(scope="module")
+def plate():
+    """A 2 x 1 plate under uniaxial tension 1, held at two points (exact: sxx = 1)."""
+    m = dv.mesh.rectangle(2.0, 1.0, 0.05, kind="lattice")
+    sup = [dv.Fix(at=(0.0, 0.0)), dv.Fix(at=(0.0, 1.0), x=0.0)]
+    loads = [dv.Traction("right", (1.0, 0.0)), dv.Traction("left", (-1.0, 0.0))]
+    return dv.solve(dv.DV(m, E, NU), sup, loads)
+
+
+def test_supports_and_point_loads_at_a_coordinate(plate):
+    m = plate.model.mesh
+    assert np.abs(plate.reactions).max() < 1e-8  # self-equilibrated load, point supports
+    corner = dv.problem.nearest_node(m, (0.0, 0.0))
+    np.testing.assert_allclose(plate.u[corner], 0.0, atol=1e-15)
+    sol = dv.solve(plate.model, [dv.Fix("left")], [dv.PointLoad(at=(2.0, 0.5), value=(0.0, -1.0))])
+    assert sol.reactions[:, 1].sum() == pytest.approx(1.0, rel=1e-9)
+    with pytest.raises(dv.InputError, match="no node near"):
+        dv.solve(plate.model, [dv.Fix(at=(5.0, 5.0))], [])
+    with pytest.raises(TypeError, match="not both"):
+        dv.Fix("left", at=(0.0, 0.0))
+    with pytest.raises(TypeError, match="value"):
+        dv.PointLoad(at=(0.0, 0.0))
+
+
+def test_stress_at_points_and_mean_over_a_region(plate):
+    s = plate.stress_at([[1.0, 0.5], [0.3, 0.7]])
+    assert s.shape == (2, 2, 2)
+    np.testing.assert_allclose(s[:, 0, 0], 1.0, atol=0.03)
+    np.testing.assert_allclose(plate.stress_at([1.0, 0.5]), s[:1])
+    mean = plate.mean_stress()
+    assert mean[0, 0] == pytest.approx(1.0, abs=0.02)  # the lattice's first-order error
+    assert abs(mean[1, 1]) < 0.02 and abs(mean[0, 1]) < 0.02
+    with pytest.raises(dv.InputError, match="outside the mesh"):
+        plate.stress_at([[3.0, 0.5]])
+    with pytest.raises(dv.InputError, match="unknown region 'core'"):
+        plate.mean_stress("core")
+
+
+def test_mean_stress_of_a_region_in_a_bimaterial_strip():
+    """Layers in parallel under a prescribed stretch: each layer carries its own E."""
+    regions = (dv.domain.Polygon(((0, 0), (2, 0), (2, 0.5), (0, 0.5)), name="soft"),)
+    m = dv.mesh.rectangle(2.0, 1.0, 0.05, kind="lattice", regions=regions)
+    model = dv.DV(m, E, 0.0, materials={"soft": (E / 2, 0.0)})
+    sup = [dv.Fix("left", x=0.0), dv.Fix("right", x=0.01), dv.Fix(at=(0.0, 0.0), y=0.0)]
+    sol = dv.solve(model, sup, [])
+    soft, whole = sol.mean_stress("soft"), sol.mean_stress()
+    assert soft[0, 0] == pytest.approx(E / 2 * 0.005, rel=0.03)
+    assert whole[0, 0] == pytest.approx(0.75 * E * 0.005, rel=0.03)
+
+
+def test_help_has_no_markup_and_verbose_works_after_the_command(capsys, tmp_path):
+    with pytest.raises(SystemExit):
+        cli.main(["--help"])
+    out = capsys.readouterr().out
+    assert "::" not in out and "Command line" in out and "4 best" in out
+    scene = tmp_path / "s.toml"
+    scene.write_text(
+        '[mesh]\ntype = "rectangle"\nwidth = 1.0\nheight = 1.0\nh = 0.2\n'
+        "[material]\nE = 1e5\nnu = 0.2\n"
+        '[[supports]]\nwhere = "left"\n[[loads]]\ntype = "traction"\nwhere = "right"\n'
+        "value = [1.0, 0.0]\n[output]\npng = false\nvtu = false\n"
+    )
+    assert cli.main(["run", str(scene), "-v", "--out", str(tmp_path / "o")]) == 0
+    err = capsys.readouterr().err
+    assert "building the mesh" in err and "solving" in err  # stage lines
+    code = cli.main(["run", str(scene), "--quiet", "--out", str(tmp_path / "o"), "--overwrite"])
+    assert code == 0 and capsys.readouterr().err == ""
+
+
+def test_solver_refusals_name_the_scene_file(capsys, tmp_path):
+    scene = tmp_path / "s.toml"
+    scene.write_text(
+        '[mesh]\ntype = "rectangle"\nwidth = 4.0\nheight = 0.5\nh = 0.125\nkind = "lattice"\n'
+        "[material]\nE = 1e3\nnu = 0.2\n"
+        '[[supports]]\nwhere = "left"\n[[loads]]\ntype = "traction"\nwhere = "right"\n'
+        "value = [0.0, -50.0]\n[solver]\nnonlinear = true\nsteps = 1\nnewton_maxiter = 1\n"
+        "max_cutbacks = 0\n[output]\npng = false\nvtu = false\n"
+    )
+    code = cli.main(["run", str(scene), "--quiet", "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err
+    assert code == 3
+    assert err.startswith(f"error: the solver refused or failed: {scene}: ")
+    assert len(err.strip().splitlines()) == 1
