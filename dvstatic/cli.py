@@ -160,6 +160,8 @@ def _write_outputs(sc, sol, fe, out_dir: Path, args, t0: float) -> tuple[dict, l
     from . import io
 
     o = sc.data["output"]
+    # one stress recovery for every output: nonlinear solutions have only the virial
+    method = None if sol.info.nonlinear else o["stress"]
     out_dir.parent.mkdir(parents=True, exist_ok=True)
     stage = out_dir.parent / f".{out_dir.name}.staging-{os.getpid()}"
     shutil.rmtree(stage, ignore_errors=True)
@@ -177,7 +179,7 @@ def _write_outputs(sc, sol, fe, out_dir: Path, args, t0: float) -> tuple[dict, l
                 field=o["field"],
                 scale=scale,
                 title=sc.data["title"] or None,
-                stress=o["stress"],
+                stress=method,
             )
             written.append(png.name)
         data = io.summary(
@@ -185,7 +187,7 @@ def _write_outputs(sc, sol, fe, out_dir: Path, args, t0: float) -> tuple[dict, l
             fe=fe,
             probes=o["probes"] or None,
             part_stress=o["part_stress"],
-            stress=None if sol.info.nonlinear else o["stress"],
+            stress=method,
             checks=o["checks"],
         )
         data["scene"] = {
@@ -457,7 +459,9 @@ def main(argv: list[str] | None = None) -> int:
     p_val.add_argument("--quick", action="store_true", help="CI sizes (seconds each)")
     p_val.add_argument("--only", help="comma-separated list, e.g. fig05,fig10,elastica")
     p_val.add_argument("--dir", help="folder of the validation scripts")
-    p_val.add_argument("--out", help="output folder (default: validation/out)")
+    p_val.add_argument(
+        "--out", help="output folder (default: validation/out; validation/out/quick with --quick)"
+    )
     p_val.add_argument("-q", "--quiet", action="store_true", help="no progress, no tables")
     p_val.set_defaults(func=_validate)
 

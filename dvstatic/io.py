@@ -318,6 +318,7 @@ def check_values(solution, checks, stress: str | None = None, fe=None) -> list[d
     mesh = solution.model.mesh
     out = []
     for c in checks:
+        _check_check(c)
         point = np.asarray(c["at"], dtype=float).reshape(1, 2)
         value = float(
             _value_at(mesh, nodal_field(solution, c["quantity"], stress), point, c["name"])
@@ -325,10 +326,34 @@ def check_values(solution, checks, stress: str | None = None, fe=None) -> list[d
         rec = dict(c, at=point[0].tolist(), value=value)
         rec["difference"] = _difference(value, c["reference"])
         if fe is not None:
-            rec["fe_value"] = _fe_value(fe, c["quantity"], snap_point(mesh, point))
+            rec["fe_value"] = _fe_value(fe, c["quantity"], snap_point(mesh, point), mesh)
             rec["fe_difference"] = _difference(rec["fe_value"], c["reference"])
         out.append(rec)
     return out
+
+
+#: quantities a check can name
+CHECK_QUANTITIES = ("ux", "uy", "|u|", "sxx", "syy", "sxy")
+
+
+def _check_check(c) -> None:
+    """Validate one check (a mapping with name, at, quantity, reference)."""
+    if not isinstance(c, dict):
+        raise TypeError(f"a check must be a dict, got {type(c).__name__}")
+    missing = [k for k in ("name", "at", "quantity", "reference") if k not in c]
+    if missing:
+        raise InputError(f"check {c.get('name', c)!r}: missing {', '.join(missing)}", "checks")
+    if c["quantity"] not in CHECK_QUANTITIES:
+        raise InputError(
+            f"check {c['name']!r}: unknown quantity {c['quantity']!r}; accepted: "
+            + ", ".join(CHECK_QUANTITIES),
+            "quantity",
+        )
+    ref = c["reference"]
+    if isinstance(ref, bool) or not isinstance(ref, (int, float, np.number)):
+        raise TypeError(f"check {c['name']!r}: reference must be a number, got {ref!r}")
+    if not np.isfinite(ref):
+        raise InputError(f"check {c['name']!r}: reference must be finite, got {ref}", "reference")
 
 
 def _difference(value: float, reference: float) -> float:
@@ -342,12 +367,22 @@ def _value_at(mesh: Mesh, field: np.ndarray, point: np.ndarray, name: str) -> fl
         raise InputError(f"check {name!r}: {exc}", "at") from None
 
 
-def _fe_value(fe, quantity: str, point: np.ndarray) -> float:
+def _fe_value(fe, quantity: str, point: np.ndarray, mesh: Mesh) -> float:
     if quantity in ("ux", "uy", "|u|"):
-        u = fe.evaluate(point)[0]
+        u = _fe_at(fe.evaluate, point, mesh)[0]
         return float({"ux": u[0], "uy": u[1], "|u|": np.hypot(*u)}[quantity])
-    s = fe.stress(point)[0]
+    s = _fe_at(fe.stress, point, mesh)[0]
     return float({"sxx": s[0, 0], "syy": s[1, 1], "sxy": 0.5 * (s[0, 1] + s[1, 0])}[quantity])
+
+
+def _fe_at(method, points: np.ndarray, mesh: Mesh) -> np.ndarray:
+    """``method(points)`` of an FE solution; points on a curved boundary that lie
+    outside the curved FE elements (between chord and arc) take the nearest node."""
+    try:
+        return method(points)
+    except InputError:
+        near = [int(np.argmin(np.hypot(*(mesh.points - p).T))) for p in points]
+        return method(mesh.points[near])
 
 
 def _mesh_summary(mesh: Mesh) -> dict:
@@ -450,8 +485,8 @@ def _probes(solution, stress: np.ndarray, p: np.ndarray, fe) -> dict:
         "stress": interpolate(mesh, stress.reshape(-1, 4), p).reshape(-1, 2, 2).tolist(),
     }
     if fe is not None:
-        out["fe_displacement"] = fe.evaluate(p).tolist()
-        out["fe_stress"] = fe.stress(p).tolist()
+        out["fe_displacement"] = _fe_at(fe.evaluate, p, mesh).tolist()
+        out["fe_stress"] = _fe_at(fe.stress, p, mesh).tolist()
     return out
 
 

@@ -43,6 +43,16 @@ def test_uniaxial(tmp_path):
     assert u[0, 0] == pytest.approx(-1.0 / E, rel=0.05)
     assert u[1, 1] == pytest.approx(NU / E, rel=0.05)
     assert "reaction" in stdout and "max |u|" in stdout
+    # the example's key numbers, printed and written against their references
+    checks = {c["name"]: c for c in d["checks"]}
+    assert set(checks) == {
+        "shortening, right edge",
+        "lateral expansion, top edge",
+        "stress at the centre",
+    }
+    for c in checks.values():
+        assert abs(c["difference"]) < 0.05, c
+        assert f"check: {c['name']}" in stdout
 
 
 def test_beam(tmp_path):
@@ -79,6 +89,16 @@ def test_cantilever_large(tmp_path):
     # 16-row lattice is 16 % too stiff in bending (docs/theory.md), hence 5 % and 12 %
     assert -u[1] / 10.0 == pytest.approx(0.7138, rel=0.05)
     assert -u[0] / 10.0 == pytest.approx(0.3876, rel=0.12)
+    assert {c["name"] for c in d["checks"]} == {"tip deflection", "tip shortening"}
+
+
+def test_nonlinear_scene_pictures_a_stress(tmp_path):
+    """The picture of a nonlinear solution coloured by a stress used the linear
+    recovery (the default of output.stress) and failed after the solve."""
+    d, _ = run_scene(
+        "cantilever_large", tmp_path, "solver.steps=2", "mesh.h=0.0625", 'output.field="sxx"'
+    )
+    assert d["solver"]["nonlinear"]
 
 
 def test_cli_version_and_help():

@@ -1,6 +1,9 @@
 """What a new user meets first: the command line's help and messages, supports and
 loads at a point, stresses at points and over regions (issue 16)."""
 
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 
@@ -72,11 +75,22 @@ def test_help_has_no_markup_and_verbose_works_after_the_command(capsys, tmp_path
         '[[supports]]\nwhere = "left"\n[[loads]]\ntype = "traction"\nwhere = "right"\n'
         "value = [1.0, 0.0]\n[output]\npng = false\nvtu = false\n"
     )
-    assert cli.main(["run", str(scene), "-v", "--out", str(tmp_path / "o")]) == 0
+    assert cli.main(["run", str(scene), "--out", str(tmp_path / "o")]) == 0
     err = capsys.readouterr().err
     assert "building the mesh" in err and "solving" in err  # stage lines
     code = cli.main(["run", str(scene), "--quiet", "--out", str(tmp_path / "o"), "--overwrite"])
     assert code == 0 and capsys.readouterr().err == ""
+    # -v after the command (it was refused there): a real process, for the log set-up
+    for args, logged in ((["run", "-v"], True), (["-v", "run"], True), (["run"], False)):
+        proc = subprocess.run(
+            [sys.executable, "-m", "dvstatic", *args, str(scene), "--overwrite", "-q"]
+            + ["--out", str(tmp_path / "v")],
+            capture_output=True,
+            text=True,
+            check=False,
+        )
+        assert proc.returncode == 0, proc.stderr
+        assert ("INFO dvstatic" in proc.stderr) is logged, (args, proc.stderr)
 
 
 def test_solver_refusals_name_the_scene_file(capsys, tmp_path):
@@ -93,3 +107,49 @@ def test_solver_refusals_name_the_scene_file(capsys, tmp_path):
     assert code == 3
     assert err.startswith(f"error: the solver refused or failed: {scene}: ")
     assert len(err.strip().splitlines()) == 1
+
+
+def test_points_on_a_curved_boundary_snap_and_bad_points_are_refused():
+    from dvstatic.mesh.locate import snap_point
+
+    m = dv.mesh.disc(1.0, 0.04)
+    theta = np.linspace(0.0, 2 * np.pi, 720, endpoint=False)
+    for t in theta:  # every point of the true circle (45 of 720 were refused before)
+        snap_point(m, [np.cos(t), np.sin(t)])
+    with pytest.raises(dv.InputError, match="outside the mesh"):
+        snap_point(m, [1.2, 0.0])
+    with pytest.raises(dv.InputError, match="not finite"):
+        snap_point(m, [np.nan, 0.0])
+    with pytest.raises(dv.InputError, match="finite"):
+        dv.Fix(at=(np.nan, 0.0))
+    with pytest.raises(TypeError, match="at must be a point"):
+        dv.Fix(at=("a", "b"))
+    with pytest.raises(TypeError, match="At selects a node"):
+        dv.Traction(dv.At(1.0, 0.0), (1.0, 0.0))
+    with pytest.raises(TypeError, match="give `nodes`"):
+        dv.PointLoad(value=(0.0, 1.0))
+
+
+def test_check_values_report_value_difference_and_fe(plate):
+    from dvstatic import io
+
+    fe = dv.fem.solve(plate.model.mesh, E, NU, plate.supports, plate.loads, order=1)
+    checks = [
+        {"name": "sxx", "at": [1.0, 0.5], "quantity": "sxx", "reference": 1.0},
+        {"name": "syy", "at": [1.0, 0.5], "quantity": "syy", "reference": 0.0},
+        {"name": "ux", "at": [2.0, 0.5], "quantity": "ux", "reference": 2.0 / E},
+    ]
+    out = io.check_values(plate, checks, fe=fe)
+    assert [c["name"] for c in out] == ["sxx", "syy", "ux"]
+    assert out[0]["value"] == pytest.approx(plate.stress_at([1.0, 0.5])[0, 0, 0])
+    assert out[0]["difference"] == pytest.approx(out[0]["value"] - 1.0)  # relative to |1|
+    assert out[1]["difference"] == pytest.approx(out[1]["value"])  # absolute, reference 0
+    assert abs(out[0]["difference"]) < 0.03 and abs(out[2]["difference"]) < 0.03
+    assert out[2]["fe_value"] == pytest.approx(2.0 / E, rel=1e-9)  # P1 is exact here
+    with pytest.raises(dv.InputError, match="unknown quantity 'szz'"):
+        io.check_values(plate, [dict(checks[0], quantity="szz")])
+    with pytest.raises(dv.InputError, match="missing reference"):
+        io.check_values(plate, [{"name": "a", "at": [1, 0.5], "quantity": "ux"}])
+    with pytest.raises(TypeError, match="reference must be a number"):
+        io.check_values(plate, [dict(checks[0], reference="1")])
+    assert plate.stress_at(np.zeros((0, 2))).shape == (0, 2, 2)

@@ -1,6 +1,8 @@
 """No silent wrong answers, no lost output."""
 
 import json
+import subprocess
+import sys
 import textwrap
 
 import numpy as np
@@ -77,9 +79,15 @@ def test_cli_best_effort_exits_nonzero(tmp_path, capsys):
         )
         .replace("value = [0.0, -1.0]", "value = [0.0, -5e4]")
     )
-    code = cli.main(["run", str(scene), "--out", str(tmp_path / "o"), "--quiet"])
-    assert code == 4
-    out, err = capsys.readouterr()
+    # a real process: the CLI's own logging set-up decides what reaches the terminal
+    proc = subprocess.run(
+        [sys.executable, "-m", "dvstatic", "run", str(scene), "--out", str(tmp_path / "o")],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert proc.returncode == 4, proc.stderr
+    out, err = proc.stdout, proc.stderr
     assert err.count("did NOT converge") == 1 and "best effort:" not in err  # said once
     d = json.loads((tmp_path / "o" / "s.json").read_text())
     s = d["solver"]
@@ -211,5 +219,5 @@ def test_linear_solve_warns_when_displacements_are_large(caplog):
     assert not caplog.records  # small: nothing said
     with caplog.at_level("WARNING", logger="dvstatic"):
         sol = dv.solve(model, dv.Fix("left"), dv.Traction("right", (0.0, -5.0)))
-    assert sol.max_displacement > 0.05 * 3.0
+    assert sol.max_displacement > 0.1 * 3.0
     assert any("nonlinear=True" in r.getMessage() for r in caplog.records)

@@ -107,7 +107,7 @@ BAD = [
         "bad value vector",
         GOOD.replace("value = [1.0, 0.0]", "value = [1.0]"),
         "loads[0].value",
-        "two numbers",
+        "two finite numbers",
     ),
     (
         "free rigid motion",

@@ -186,13 +186,18 @@ def _reference_points(basis, x: np.ndarray, cells: np.ndarray) -> np.ndarray:
     """Reference coordinates of points ``x`` (2, n) in their ``cells``, in chunks (see
     :data:`FACET_CHUNK`), shape (2, n, 1)."""
     chunks = range(0, x.shape[1], FACET_CHUNK) if x.shape[1] else [0]
-    return np.concatenate(
-        [
-            basis.mapping.invF(x[:, i : i + FACET_CHUNK, None], tind=cells[i : i + FACET_CHUNK])
-            for i in chunks
-        ],
-        axis=1,
-    )
+    try:
+        return np.concatenate(
+            [
+                basis.mapping.invF(x[:, i : i + FACET_CHUNK, None], tind=cells[i : i + FACET_CHUNK])
+                for i in chunks
+            ],
+            axis=1,
+        )
+    except Exception as exc:  # noqa: BLE001 - scikit-fem's Newton raises a bare Exception
+        # a point between the straight linear edges and the true curve (outside a
+        # curved quadratic element) has no reference coordinates in its cell
+        raise InputError(f"a point lies outside the curved FE geometry ({exc})", "points") from None
 
 
 def _probes(basis, fe: FEMesh, p: np.ndarray):

@@ -35,6 +35,9 @@ def interpolate(mesh: Mesh, field, points) -> np.ndarray:
     p = np.atleast_2d(np.asarray(points, dtype=float))
     if p.ndim != 2 or p.shape[1] != 2:
         raise InputError(f"points must have shape (n, 2), got {p.shape}", "points")
+    if not np.all(np.isfinite(p)):
+        bad = p[~np.all(np.isfinite(p), axis=1)][0]
+        raise InputError(f"point {bad.tolist()} is not finite", "points")
     if f.shape[0] != mesh.n_points:
         raise InputError(f"field must have {mesh.n_points} rows, got {f.shape[0]}", "field")
     x = mesh.triangle_coordinates()
@@ -71,29 +74,45 @@ def interpolate(mesh: Mesh, field, points) -> np.ndarray:
 
 
 def snap_point(mesh: Mesh, point) -> np.ndarray:
-    """``point`` (shape (1, 2)) if it lies in the mesh, else its nearest node when that
-    is within half the local spacing (a point on a curved boundary, which the mesh's
-    straight edges cut inside).
+    """``point`` (shape (1, 2)) if it lies in the mesh, else its foot on the nearest
+    boundary edge when that is within half the edge's length (a point on a curved
+    boundary, which the mesh's straight edges cut inside).
 
     Raises
     ------
     InputError
-        If the point is farther than half the local spacing from the mesh.
+        If the point is not finite, or farther than that from the mesh.
     """
     point = np.asarray(point, dtype=float).reshape(1, 2)
+    if not np.all(np.isfinite(point)):
+        raise InputError(f"point {point[0].tolist()} is not finite", "points")
+    if _inside(mesh, point):
+        return point
+    e = mesh.boundary_edges
+    a, b = mesh.points[e[:, 0]], mesh.points[e[:, 1]]
+    ab = b - a
+    length2 = np.einsum("ij,ij->i", ab, ab)
+    t = np.clip(np.einsum("ij,ij->i", point - a, ab) / length2, 0.0, 1.0)
+    foot = a + t[:, None] * ab
+    d = np.hypot(*(foot - point).T)
+    k = int(np.argmin(d))
+    if d[k] > 0.5 * np.sqrt(length2[k]):
+        raise InputError(
+            f"point {point[0].tolist()} lies outside the mesh ({d[k]:.3g} from its "
+            "boundary, more than half the local spacing)",
+            "points",
+        )
+    near = e[k, 0] if t[k] < 0.5 else e[k, 1]
+    # the foot lies on the edge; round-off may put it a hair outside: then the node
+    return foot[k : k + 1] if _inside(mesh, foot[k : k + 1]) else mesh.points[near : near + 1]
+
+
+def _inside(mesh: Mesh, point: np.ndarray) -> bool:
     try:
         interpolate(mesh, np.zeros(mesh.n_points), point)
-        return point
     except InputError:
-        d = np.hypot(*(mesh.points - point).T)
-        i = int(np.argmin(d))
-        if d[i] > 0.5 * local_spacing(mesh, i):
-            raise InputError(
-                f"point {point[0].tolist()} lies outside the mesh (its nearest node is "
-                f"{d[i]:.3g} away, more than half the local spacing)",
-                "points",
-            ) from None
-        return mesh.points[i : i + 1]
+        return False
+    return True
 
 
 def local_spacing(mesh: Mesh, node: int) -> float:

@@ -51,7 +51,7 @@ class Traction:
     value: object
 
     def __post_init__(self) -> None:
-        where_ok(self.where, "Traction")
+        where_ok(self.where, "Traction", nodes=False)
         object.__setattr__(self, "value", vector_or_callable(self.value, "Traction value"))
 
 
@@ -79,7 +79,7 @@ class Pressure:
     follower: bool = False
 
     def __post_init__(self) -> None:
-        where_ok(self.where, "Pressure")
+        where_ok(self.where, "Pressure", nodes=False)
         if not callable(self.p):
             object.__setattr__(self, "p", check_real("Pressure p", self.p))
         if not isinstance(self.follower, (bool, np.bool_)):
@@ -133,7 +133,7 @@ class PointLoad:
     at: object = None
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "nodes", _at_where(self.nodes, self.at, "PointLoad"))
+        object.__setattr__(self, "nodes", _at_where(self.nodes, self.at, "PointLoad", "nodes"))
         if self.value is None:
             raise TypeError("PointLoad: `value` (fx, fy) is required")
         where_ok(self.nodes, "PointLoad")

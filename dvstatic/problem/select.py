@@ -38,6 +38,8 @@ def nearest_node(mesh: Mesh, point) -> int:
     from ..mesh.locate import local_spacing
 
     p = np.asarray(point, dtype=float).reshape(2)
+    if not np.all(np.isfinite(p)):
+        raise InputError(f"at must be a finite point (x, y), got {p.tolist()}", "at")
     d = np.hypot(*(mesh.points - p).T)
     i = int(np.argmin(d))
     h = local_spacing(mesh, i)
@@ -50,9 +52,16 @@ def nearest_node(mesh: Mesh, point) -> int:
     return i
 
 
-def where_ok(where, name: str) -> None:
-    if isinstance(where, (str, At)):
+def where_ok(where, name: str, nodes: bool = True) -> None:
+    """Check a selection's type: a part name or an index array; ``At`` for node
+    selections only (``nodes``)."""
+    if isinstance(where, str) or (nodes and isinstance(where, At)):
         return
+    if isinstance(where, At):
+        raise TypeError(
+            f"{name}: `where` must be a boundary part name or an array of boundary edges "
+            "(At selects a node: use PointLoad for a force at a point)"
+        )
     if isinstance(where, (np.ndarray, Sequence)) and not isinstance(where, (bytes, bytearray)):
         return
     raise TypeError(

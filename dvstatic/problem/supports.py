@@ -173,15 +173,20 @@ def constraints(mesh: Mesh, supports) -> tuple[np.ndarray, np.ndarray]:
     return dofs[keep], vals[keep]
 
 
-def _at_where(where, at, name: str):
+def _at_where(where, at, name: str, key: str = "where"):
     """``where``, or ``At(*at)`` when only ``at`` is given (exactly one is needed)."""
     if at is None:
         if where is None:
-            raise TypeError(f"{name}: give `where` (a part, node indices) or `at=(x, y)`")
+            raise TypeError(f"{name}: give `{key}` (a part, node indices) or `at=(x, y)`")
         return where
     if where is not None:
-        raise TypeError(f"{name}: give `where` or `at`, not both")
-    a = np.asarray(at)
+        raise TypeError(f"{name}: give `{key}` or `at`, not both")
+    try:
+        a = np.asarray(at, dtype=float)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name}: at must be a point (x, y) of numbers, got {at!r}") from None
     if a.shape != (2,):
         raise InputError(f"{name}: at must be a point (x, y), got shape {a.shape}", "at")
+    if not np.all(np.isfinite(a)):
+        raise InputError(f"{name}: at must be finite, got {a.tolist()}", "at")
     return At(float(a[0]), float(a[1]))

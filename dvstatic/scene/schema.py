@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
+from ..io import CHECK_QUANTITIES
 from ..mesh.generators import DEFAULT_JITTER
 from ..solvers.options import ALIASES, SolveOptions
 
@@ -66,8 +67,6 @@ PROFILE_DOC = (
     "along the line from (x0, y0) to (x1, y1) (constant beyond its ends)"
 )
 
-#: quantities an ``[[output.checks]]`` entry can name
-CHECK_QUANTITIES = ("ux", "uy", "|u|", "sxx", "syy", "sxy")
 
 SCHEMA: dict[str, F] = {
     "title": F("string", "free text shown in the summary", default=""),
@@ -195,7 +194,11 @@ SCHEMA: dict[str, F] = {
         default=[],
         schema={
             "where": F("nodes", "boundary part name or list of node indices"),
-            "at": F("point", "instead of where: the node nearest to this point"),
+            "at": F(
+                "point",
+                "instead of where: the node nearest to this point (refused if no node lies "
+                "within the local spacing)",
+            ),
             "x": F("number", "prescribed u_x (length); omit to leave free"),
             "y": F(
                 "number",
@@ -219,7 +222,11 @@ SCHEMA: dict[str, F] = {
                 choices=("traction", "pressure", "body", "point"),
             ),
             "where": F("nodes", "traction, pressure: part name; point: part name or node indices"),
-            "at": F("point", "point: instead of where, the node nearest to this point"),
+            "at": F(
+                "point",
+                "point: instead of where, the node nearest to this point (refused if no "
+                "node lies within the local spacing)",
+            ),
             "value": F("point", "force vector (fx, fy): traction, body, point"),
             "value_at": F(
                 "rows", "traction: instead of value, a " + PROFILE_DOC.format(v="tx, ty")
@@ -246,7 +253,12 @@ SCHEMA: dict[str, F] = {
         "what to write",
         default={},
         schema={
-            "vtu": F("bool", "<name>.vtu: displacement, stress, bond tensions", default=True),
+            "vtu": F(
+                "bool",
+                "<name>.vtu (triangles: displacement, stress tensors, von Mises, area, "
+                "material) and <name>_bonds.vtu (bonds: tension, length)",
+                default=True,
+            ),
             "png": F("bool", "<name>.png: deformed mesh coloured by `field`", default=True),
             "json": F("bool", "<name>.json: summary (mesh, model, results, timings)", default=True),
             "field": F(
@@ -257,7 +269,8 @@ SCHEMA: dict[str, F] = {
             ),
             "stress": F(
                 "string",
-                "stress recovery of the picture and the VTU: recovered (patch fits with "
+                "stress recovery of the picture, probes, checks and part stresses (the VTU "
+                "holds recovered and virial): recovered (patch fits with "
                 "the continuum law, equilibrated fits at boundaries: right at free and curved "
                 "edges), virial (the lattice's bond forces over each Voronoi cell) or strain "
                 "(area-averaged lattice strain); nonlinear solves use virial",
@@ -445,21 +458,14 @@ def _check_value(path, where: str, v, f: F):
             fail("an array of strings")
         return list(v)
     if k == "point":
-        if (
-            not isinstance(v, list)
-            or len(v) != 2
-            or not all(isinstance(x, numbers.Real) and not isinstance(x, bool) for x in v)
-        ):
-            fail("two numbers [x, y]")
+        if not isinstance(v, list) or len(v) != 2 or not all(_finite(x) for x in v):
+            fail("two finite numbers [x, y]")
         return [float(x) for x in v]
     if k == "points":
         if not isinstance(v, list) or not all(
-            isinstance(p, list)
-            and len(p) == 2
-            and all(isinstance(x, numbers.Real) and not isinstance(x, bool) for x in p)
-            for p in v
+            isinstance(p, list) and len(p) == 2 and all(_finite(x) for x in p) for p in v
         ):
-            fail("an array of [x, y] pairs")
+            fail("an array of [x, y] pairs of finite numbers")
         return [[float(x) for x in p] for p in v]
     if k == "rows":
         if not isinstance(v, list) or not all(
@@ -487,6 +493,10 @@ def _check_value(path, where: str, v, f: F):
             fail("an array of tables ([[...]])")
         return [_validate(path, item, f.schema, f"{where}[{i}]") for i, item in enumerate(v)]
     raise AssertionError(k)  # pragma: no cover - schema kinds are fixed above
+
+
+def _finite(x) -> bool:
+    return isinstance(x, numbers.Real) and not isinstance(x, bool) and bool(np.isfinite(x))
 
 
 def _check_rules(path, d: dict) -> None:

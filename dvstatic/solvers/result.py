@@ -350,8 +350,14 @@ class Solution:
         p = np.atleast_2d(np.asarray(points, dtype=float))
         if p.ndim != 2 or p.shape[1] != 2:
             raise InputError(f"points must have shape (n, 2), got {p.shape}", "points")
-        p = np.concatenate([snap_point(mesh, q) for q in p])
-        return interpolate(mesh, self.stress(method).reshape(-1, 4), p).reshape(-1, 2, 2)
+        s = self.stress(method).reshape(-1, 4)
+        if len(p) == 0:
+            return np.zeros((0, 2, 2))
+        try:  # one search for all points; point by point only if one misses
+            return interpolate(mesh, s, p).reshape(-1, 2, 2)
+        except InputError:
+            p = np.concatenate([snap_point(mesh, q) for q in p])
+            return interpolate(mesh, s, p).reshape(-1, 2, 2)
 
     def mean_stress(self, region: str | None = None, method: str | None = None) -> np.ndarray:
         """Area-weighted mean stress over a region of the mesh (None: the whole body),

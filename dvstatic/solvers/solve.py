@@ -126,7 +126,7 @@ def _solve_serial(model: VoronoiModel, supports: list, loads: list, opts) -> Sol
 
 #: a linear solution whose largest displacement exceeds this fraction of the body's
 #: size is warned about (small-strain theory no longer describes it)
-LARGE_DISPLACEMENT = 0.05
+LARGE_DISPLACEMENT = 0.1
 
 
 def _warn_large(mesh, u: np.ndarray) -> None:
@@ -224,8 +224,11 @@ def _unconverged(
     reactions[dofs] = r_full[dofs]
     free = np.ones(x.size, dtype=bool)
     free[dofs] = False
-    # relative to the full load (or the reactions, with only prescribed displacements)
-    scale = max(float(np.linalg.norm(f_full)), float(np.linalg.norm(r_full[dofs])))
+    # relative to the load the state belongs to (or the reactions, with only prescribed
+    # displacements)
+    scale = max(
+        float(np.linalg.norm(exc.load_factor * f_full)), float(np.linalg.norm(r_full[dofs]))
+    )
     r_free = float(np.linalg.norm(r_full[free]))
     residual = r_free / scale if scale > 0 else (0.0 if r_free == 0 else float("inf"))
     prior = exc.info if isinstance(exc.info, SolveInfo) else SolveInfo(opts.resolved_solver(x.size))
