@@ -3,6 +3,7 @@ loads at a point, stresses at points and over regions (issue 16)."""
 
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -11,6 +12,7 @@ import dvstatic as dv
 from dvstatic import cli
 
 E, NU = 1e5, 0.3
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 
 @pytest.fixture(scope="module")
@@ -153,3 +155,25 @@ def test_check_values_report_value_difference_and_fe(plate):
     with pytest.raises(TypeError, match="reference must be a number"):
         io.check_values(plate, [dict(checks[0], reference="1")])
     assert plate.stress_at(np.zeros((0, 2))).shape == (0, 2, 2)
+
+
+def test_missing_petsc_is_one_error_line_with_the_fix(tmp_path):
+    """`--set solver.type='"petsc"'` without petsc4py printed a traceback and exit 1."""
+    code = (
+        "import sys; sys.modules['petsc4py'] = None; sys.modules['mpi4py'] = None\n"
+        "from dvstatic.cli import main\n"
+        f"sys.exit(main(['run', {str(EXAMPLES / 'uniaxial.toml')!r}, '--set',"
+        f" 'solver.type=\"petsc\"', '--out', {str(tmp_path / 'o')!r}, '-q']))"
+    )
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert proc.returncode == 2, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: ") and "Traceback" not in proc.stderr
+    assert "install_petsc.sh" in lines[0] and "dvstatic[petsc]" in lines[0]
+
+
+@pytest.mark.parametrize("value", ["0", "-1", "2"])
+def test_mesh_h_errors_name_the_key(value, capsys):
+    code = cli.main(["run", str(EXAMPLES / "uniaxial.toml"), "--set", f"mesh.h={value}", "-q"])
+    err = capsys.readouterr().err
+    assert code == 2 and ": mesh.h: " in err and len(err.strip().splitlines()) == 1

@@ -5,10 +5,11 @@ The lattice strain of a triangle (its P1 strain) fluctuates from triangle to tri
 on an irregular mesh, and the force-based (virial) stress of a surface particle sees
 only half a cell. The recovery therefore works in two parts:
 
-* **patch fit** (every node): a weighted least-squares quadratic through the strains of
-  the ``k`` triangles nearest to the node (centroid samples, triangles of the node's
-  material only), evaluated at the node; the continuum law of that material turns it
-  into stress (plane strain: the in-plane effective constants);
+* **patch fit** (every node): a least-squares linear fit, weighted by area and a smooth
+  kernel, through the strains of the ``k`` triangles nearest to the node (centroid
+  samples, triangles of the node's material only), evaluated at the node; the
+  continuum law of that material turns it into stress (plane strain: the in-plane
+  effective constants);
 * **strain gauge** (nodes on a free or loaded boundary, away from corners and
   supports): the stress vector on the boundary is known, ``sigma n = t`` (zero on a
   free edge, the applied traction or pressure otherwise), and the strain along the
