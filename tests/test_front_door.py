@@ -177,3 +177,24 @@ def test_mesh_h_errors_name_the_key(value, capsys):
     code = cli.main(["run", str(EXAMPLES / "uniaxial.toml"), "--set", f"mesh.h={value}", "-q"])
     err = capsys.readouterr().err
     assert code == 2 and ": mesh.h: " in err and len(err.strip().splitlines()) == 1
+
+
+def test_stress_is_recovered_once_per_solution(monkeypatch):
+    """Every check, probe and picture asked for the recovery again (about a solve's
+    time each at 1e5 nodes); it is computed once per method and copies are returned."""
+    from dvstatic import io
+    from dvstatic.solvers import result
+
+    calls = []
+    real = result.recovered_stress
+    monkeypatch.setattr(result, "recovered_stress", lambda *a: calls.append(1) or real(*a))
+    m = dv.mesh.rectangle(2.0, 1.0, 0.1, kind="lattice")
+    sol = dv.solve(dv.DV(m, E, NU), [dv.Fix("left")], [dv.Traction("right", (0.0, -1.0))])
+    s = sol.stress()
+    s[:] = 0.0  # the caller's copy
+    assert np.abs(sol.stress()).max() > 0
+    sol.stress_at([[1.0, 0.5]])
+    sol.mean_stress()
+    checks = [{"name": "a", "at": [1.0, 0.5], "quantity": "sxx", "reference": 1.0}]
+    io.summary(sol, probes=[[1.0, 0.5]], part_stress=["top"], checks=checks)
+    assert len(calls) == 1

@@ -285,6 +285,8 @@ class Solution:
     info: SolveInfo
     supports: list = field(default_factory=list)
     loads: list = field(default_factory=list)
+    #: stresses computed so far, one per method (the recovery costs about a solve)
+    _stresses: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @property
     def max_displacement(self) -> float:
@@ -312,9 +314,17 @@ class Solution:
             stress over each Voronoi cell (:func:`dvstatic.post.node_stress`), which
             surface particles overestimate. ``strain``: the continuum law applied to
             the area-averaged lattice strain (:func:`dvstatic.post.strain_stress`).
+
+        Each method is computed once per solution (a copy is returned); ``u`` is not
+        meant to be changed in place.
         """
         if method is None:
             method = "virial" if self.info.nonlinear else "recovered"
+        if method not in self._stresses:
+            self._stresses[method] = self._compute_stress(method)
+        return self._stresses[method].copy()
+
+    def _compute_stress(self, method: str) -> np.ndarray:
         if method == "recovered":
             if self.info.nonlinear:
                 raise InputError(
