@@ -132,6 +132,28 @@ CASES = [
         "conflicting supports",
     ),
     ("fix where wrong type", lambda: dv.Fix(3.5), TypeError, "part name, an index array or At"),
+    ("fix at not finite", lambda: dv.Fix(at=(float("nan"), 0.0)), ValueError, "at must be finite"),
+    (
+        "fix at far from every node",
+        lambda: dv.solve(dv.DV(_lattice(), 1e5, 0.2), [dv.Fix(at=(5.0, 5.0))], []),
+        ValueError,
+        "no node near",
+    ),
+    (
+        "traction at a point",
+        lambda: dv.Traction(dv.At(1.0, 0.5), (1.0, 0.0)),
+        TypeError,
+        "At selects a node",
+    ),
+    ("point load without nodes", lambda: dv.PointLoad(value=(0, 1)), TypeError, "give `nodes`"),
+    (
+        "stress outside the mesh",
+        lambda: dv.solve(
+            dv.DV(_lattice(), 1e5, 0.2), [dv.Fix("left")], [dv.Traction("right", (1.0, 0.0))]
+        ).stress_at([[3.0, 3.0]]),
+        ValueError,
+        "outside the mesh",
+    ),
     (
         "load in supports",
         lambda: dv.solve(dv.DV(_lattice(), 1e5, 0.2), [dv.BodyForce((0, 1))], []),
