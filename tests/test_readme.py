@@ -12,3 +12,13 @@ def test_readme_python_blocks_run():
     namespace: dict = {}
     exec(compile("\n".join(blocks), str(README), "exec"), namespace)  # noqa: S102
     assert namespace["sol"].info.converged
+
+
+def test_quickstart_python_blocks_run(tmp_path, monkeypatch):
+    quickstart = README.parent / "docs" / "quickstart.md"
+    blocks = re.findall(r"```python\n(.*?)```", quickstart.read_text(), re.S)
+    assert blocks, "the quickstart has no python examples"
+    monkeypatch.chdir(tmp_path)  # it writes beam.vtu
+    namespace: dict = {}
+    exec(compile("\n".join(blocks), str(quickstart), "exec"), namespace)  # noqa: S102
+    assert namespace["sol"].info.converged and (tmp_path / "beam.vtu").is_file()
