@@ -423,7 +423,8 @@ def _help_text() -> str:
     return "\n".join(ln[4:] if ln.startswith("    ") else ln for ln in lines)
 
 
-def main(argv: list[str] | None = None) -> int:
+def _parser() -> argparse.ArgumentParser:
+    """The command line: ``run``, ``validate``, ``bench``, ``demo``."""
     parser = argparse.ArgumentParser(
         prog="dvstatic",
         description=_help_text(),
@@ -480,7 +481,11 @@ def main(argv: list[str] | None = None) -> int:
         help="lattice spacings (default: 0.05 0.025 0.0125)",
     )
     demo.set_defaults(func=_demo)
+    return parser
 
+
+def main(argv: list[str] | None = None) -> int:
+    parser = _parser()
     args = parser.parse_args(argv)
     args.verbose = args.verbose or getattr(args, "verbose_here", False)
     logging.basicConfig(
