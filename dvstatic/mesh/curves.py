@@ -11,6 +11,7 @@ degrees.
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -23,22 +24,19 @@ __all__ = ["Curve", "Line", "Arc", "EllipseArc"]
 
 
 @dataclass(frozen=True, eq=False)
-class Curve:
-    """A named parametric curve ``C(t)``, ``t`` in [0, 1] (base of the concrete kinds)."""
+class Curve(ABC):
+    """A named parametric curve ``C(t)``, ``t`` in [0, 1] (base of the concrete kinds,
+    each a frozen dataclass with a ``name`` field)."""
 
     straight: ClassVar[bool] = False
 
-    @property
-    def name(self) -> str:  # pragma: no cover - every subclass has the field
-        raise NotImplementedError
-
+    @abstractmethod
     def point(self, t: np.ndarray) -> np.ndarray:
         """Points ``C(t)``, shape (m, 2)."""
-        raise NotImplementedError  # pragma: no cover
 
+    @abstractmethod
     def derivative(self, t: np.ndarray) -> np.ndarray:
         """``C'(t)``, shape (m, 2)."""
-        raise NotImplementedError  # pragma: no cover
 
     @property
     def start(self) -> np.ndarray:

@@ -15,6 +15,7 @@ with the region they lie in.
 from __future__ import annotations
 
 import logging
+from abc import ABC, abstractmethod
 from dataclasses import dataclass
 
 import numpy as np
@@ -37,11 +38,12 @@ __all__ = [
 ]
 
 
-class _LoopBase:
+class _LoopBase(ABC):
     """What every loop offers (its curves give the rest)."""
 
+    @abstractmethod
     def pieces(self) -> tuple[Curve, ...]:
-        raise NotImplementedError  # pragma: no cover
+        """The loop's curves, in order."""
 
     @property
     def names(self) -> tuple[str, ...]:
