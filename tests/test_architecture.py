@@ -48,6 +48,7 @@ LAYERS = {
     "dvstatic.post": 6,
     "dvstatic.fem": 6,
     "dvstatic.io": 6,
+    "dvstatic.report": 6,
     "dvstatic.plot": 6,
     "dvstatic.scene": 7,
     "dvstatic.cli": 7,

@@ -14,8 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
-from ..io import CHECK_QUANTITIES
 from ..mesh.generators import DEFAULT_JITTER
+from ..report import CHECK_QUANTITIES
 from ..solvers.options import ALIASES, SolveOptions
 
 log = logging.getLogger(__name__)
