@@ -13,7 +13,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from .build import Scene
-from .schema import SCHEMA, SOLVER_KEYS, F, SceneError, parse, reference_markdown
+from .parse import parse
+from .schema import SCHEMA, SOLVER_KEYS, F, SceneError, reference_markdown
 
 __all__ = ["SceneError", "Scene", "load", "SCHEMA", "SOLVER_KEYS", "F", "reference_markdown"]
 
