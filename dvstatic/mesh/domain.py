@@ -23,6 +23,7 @@ import numpy as np
 from .._planar import cross
 from ..errors import InputError
 from .curves import Arc, Curve, EllipseArc, Line
+from .polygons import are_edges, boundary_edges, in_polygon, self_intersects, signed_area
 
 log = logging.getLogger(__name__)
 
@@ -60,7 +61,7 @@ class _LoopBase(ABC):
 
     @property
     def area(self) -> float:
-        return abs(_signed_area(self.samples()))
+        return abs(signed_area(self.samples()))
 
     @property
     def perimeter(self) -> float:
@@ -68,7 +69,7 @@ class _LoopBase(ABC):
 
     def contains(self, p: np.ndarray) -> np.ndarray:
         """Even-odd point-in-polygon test on the polyline, (n,) bool."""
-        return _in_polygon(self.samples(), p)
+        return in_polygon(self.samples(), p)
 
     def distances(self, p: np.ndarray) -> np.ndarray:
         """Distance of each point to each curve, shape (n, k)."""
@@ -114,11 +115,11 @@ class Polygon(_LoopBase):
             raise InputError(
                 "polygon has repeated consecutive vertices (zero-length edge)", "vertices"
             )
-        if _self_intersects(v):
+        if self_intersects(v):
             raise InputError(
                 "polygon edges intersect each other (self-intersecting polygon)", "vertices"
             )
-        if abs(_signed_area(v)) <= 1e-14 * float(np.max(np.ptp(v, axis=0))) ** 2:
+        if abs(signed_area(v)) <= 1e-14 * float(np.max(np.ptp(v, axis=0))) ** 2:
             raise InputError("polygon has zero area", "vertices")
         v.setflags(write=False)
         object.__setattr__(self, "vertices", v)
@@ -138,7 +139,7 @@ class Polygon(_LoopBase):
 
     @property
     def area(self) -> float:
-        return abs(_signed_area(self.vertices))
+        return abs(signed_area(self.vertices))
 
     def distances(self, p: np.ndarray) -> np.ndarray:
         v = self.vertices
@@ -221,7 +222,7 @@ class Path(_LoopBase):
                     "closed and connected",
                     "curves",
                 )
-        if _self_intersects(self._polyline(curves)):
+        if self_intersects(self._polyline(curves)):
             raise InputError("path curves intersect each other", "curves")
         object.__setattr__(self, "curves", curves)
 
@@ -426,13 +427,13 @@ class Domain:
         n_in = len(points)
         for _ in range(max_passes + 1):
             tri = self.delaunay(points)
-            edges, third = _boundary_edges(tri, with_third=True)
+            edges, third = boundary_edges(tri, with_third=True)
             curve = self.curve_of_edges(points, edges, tol)
             po, pa, pc = points[edges[:, 0]], points[edges[:, 1]], points[third]
             dot = np.einsum("ij,ij->i", po - pc, pa - pc)
             ll = np.einsum("ij,ij->i", pa - po, pa - po)
             enc = dot < -1e-9 * ll if conform else np.zeros(len(edges), dtype=bool)
-            missing = ~_are_edges(tri, segs[:, :2], len(points))
+            missing = ~are_edges(tri, segs[:, :2], len(points))
             if not enc.any() and not missing.any():
                 break
             points, segs = self._split(points, edges[enc], curve[enc], segs, missing)
@@ -581,33 +582,6 @@ def _check_used(points: np.ndarray, tri: np.ndarray) -> None:
         )
 
 
-def _are_edges(tri: np.ndarray, pairs: np.ndarray, n: int) -> np.ndarray:
-    """Which node pairs (s, 2) are edges of the triangulation, (s,) bool."""
-    if len(pairs) == 0:
-        return np.zeros(0, dtype=bool)
-    e = np.stack([tri[:, [1, 2]], tri[:, [2, 0]], tri[:, [0, 1]]], axis=1).reshape(-1, 2)
-    keys = np.unique(np.minimum(e[:, 0], e[:, 1]) * n + np.maximum(e[:, 0], e[:, 1]))
-    want = np.minimum(pairs[:, 0], pairs[:, 1]) * n + np.maximum(pairs[:, 0], pairs[:, 1])
-    return np.isin(want, keys)
-
-
-def _in_polygon(v: np.ndarray, p: np.ndarray) -> np.ndarray:
-    """Even-odd point-in-polygon test, (n,) bool (points on edges are ambiguous)."""
-    w = np.roll(v, -1, axis=0)
-    x, y = p[:, 0:1], p[:, 1:2]
-    cond = (v[None, :, 1] > y) != (w[None, :, 1] > y)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        xc = v[None, :, 0] + (y - v[None, :, 1]) * (w[None, :, 0] - v[None, :, 0]) / (
-            w[None, :, 1] - v[None, :, 1]
-        )
-    return (np.count_nonzero(cond & (x < xc), axis=1) % 2) == 1
-
-
-def _signed_area(v: np.ndarray) -> float:
-    w = np.roll(v, -1, axis=0)
-    return 0.5 * float(np.sum(v[:, 0] * w[:, 1] - w[:, 0] * v[:, 1]))
-
-
 def _loop_samples(loop: Loop, n: int = 64) -> np.ndarray:
     if isinstance(loop, Circle):
         t = np.linspace(0, 2 * np.pi, n, endpoint=False)
@@ -619,42 +593,3 @@ def _loop_samples(loop: Loop, n: int = 64) -> np.ndarray:
         s = np.linspace(0, 1, 8, endpoint=False)
         return (v[:, None, :] + s[None, :, None] * (w - v)[:, None, :]).reshape(-1, 2)
     return loop.samples()
-
-
-def _self_intersects(v: np.ndarray) -> bool:
-    k = len(v)
-    p, q = v, np.roll(v, -1, axis=0)
-    i, j = np.triu_indices(k, 1)
-    adjacent = (j == i + 1) | ((i == 0) & (j == k - 1))
-    i, j = i[~adjacent], j[~adjacent]
-    if i.size == 0:
-        return False
-
-    def orient(a, b, c):
-        return np.sign(cross(b - a, c - a))
-
-    o1 = orient(p[i], q[i], p[j])
-    o2 = orient(p[i], q[i], q[j])
-    o3 = orient(p[j], q[j], p[i])
-    o4 = orient(p[j], q[j], q[i])
-    proper = (o1 * o2 < 0) & (o3 * o4 < 0)
-    touching = ((o1 == 0) | (o2 == 0) | (o3 == 0) | (o4 == 0)) & (
-        np.maximum(np.minimum(p[i], q[i]), np.minimum(p[j], q[j]))
-        <= np.minimum(np.maximum(p[i], q[i]), np.maximum(p[j], q[j]))
-    ).all(axis=1)
-    return bool(np.any(proper | touching))
-
-
-def _boundary_edges(tri: np.ndarray, with_third: bool = False):
-    """Directed boundary edges (counter-clockwise) of a triangle list.
-
-    With ``with_third`` also return the vertex opposite each edge.
-    """
-    e = np.stack([tri[:, [1, 2]], tri[:, [2, 0]], tri[:, [0, 1]]], axis=1).reshape(-1, 2)
-    n = int(tri.max()) + 1
-    key = np.minimum(e[:, 0], e[:, 1]) * n + np.maximum(e[:, 0], e[:, 1])
-    _, inv, cnt = np.unique(key, return_inverse=True, return_counts=True)
-    sel = cnt[inv] == 1
-    if with_third:
-        return e[sel], tri.reshape(-1)[sel]
-    return e[sel]
