@@ -52,6 +52,8 @@ _LAZY_NAMES = {
     "elastic_tensor": "post",
     "plane_stress_tensor": "post",
     "compare": "fem",
+    "fracture": "crack",
+    "Weibull": "crack",
     "clear_caches": "_cache",
     "cache_info": "_cache",
 }
@@ -98,6 +100,8 @@ __all__ = [
     "solvers",
     "fem",
     "compare",
+    "fracture",
+    "Weibull",
     "Mesh",
     "DV",
     "RV",

@@ -97,6 +97,8 @@ def _run(args: argparse.Namespace) -> int:
     supports = sc.build_supports(mesh)
     loads = sc.build_loads(mesh)
     sc.check_outputs(mesh)  # before the solve, not after it
+    if sc.data["fracture"] is not None:
+        return _run_fracture(sc, model, supports, loads, out_dir, args, say, t0)
     say(f"solving ({model.kind}, {2 * mesh.n_points} dof)")
     try:
         sol = solve(model, supports, loads, progress=_show_progress(args), **sc.solve_options())
@@ -118,6 +120,79 @@ def _run(args: argparse.Namespace) -> int:
         )
         return 4
     return 0
+
+
+def _run_fracture(sc, model, supports, loads, out_dir: Path, args, say, t0: float) -> int:
+    """``[fracture]``: the event-driven analysis, its JSON, curve and VTU series."""
+    from . import io
+    from .crack import fracture
+    from .report import fracture_checks, fracture_lines
+
+    opts = sc.fracture_options()
+    say(
+        f"fracture ({model.kind}, {2 * model.mesh.n_points} dof, up to {opts['max_events']} "
+        "events; Ctrl-C stops and keeps the events so far)"
+    )
+    try:
+        res = fracture(model, supports, loads, progress=_show_progress(args), **opts)
+    except InputError as exc:
+        raise _scene_error(sc, _fracture_key(sc, exc.param), exc) from None
+    say("writing the outputs")
+    o, name = sc.data["output"], sc.name
+    stage = out_dir.parent / f".{out_dir.name}.staging-{os.getpid()}"
+    shutil.rmtree(stage, ignore_errors=True)
+    stage.mkdir(parents=True)
+    written = []
+    try:
+        data = res.to_dict()
+        data["checks"] = fracture_checks(res, sc.data["fracture"]["checks"])
+        data["model"] = repr(model)
+        data["scene"] = {
+            "file": str(sc.path),
+            "title": sc.data["title"],
+            "overrides": list(args.set or ()),
+            "resolved": sc.data,
+        }
+        data["dvstatic_version"] = __version__
+        data["created"] = datetime.now(UTC).isoformat(timespec="seconds")
+        data["seconds_total"] = time.perf_counter() - t0
+        if o["png"] and res.events:
+            written.append(
+                io.write_fracture_curve(
+                    stage / f"{name}_curve.png", res, sc.data["title"] or None
+                ).name
+            )
+        if o["vtu"]:
+            pvd = io.write_fracture_series(stage / f"{name}_fracture", res, name)
+            written.append(f"{name}_fracture/{pvd.name}")
+        written.append(io.write_json(stage / f"{name}_fracture.json", data).name)
+        _swap_in(stage, out_dir)
+    except BaseException:
+        shutil.rmtree(stage, ignore_errors=True)
+        raise
+    title = f"{sc.data['title'] or sc.name}"
+    print("\n".join(fracture_lines(res, data["checks"], title, [out_dir / w for w in written])))
+    return 130 if res.stop_reason == "interrupted" else 0
+
+
+def _fracture_key(sc, param: str) -> str:
+    """The scene key of an input error of ``dv.fracture`` (``param`` as it names it)."""
+    if param in ("supports", "loads", "mesh", "model"):
+        return param
+    name, _, region = param.partition("[")
+    region = region.strip("'\"]")
+    for i, r in enumerate(sc.data["fracture"]["regions"]):
+        if region and r["name"] == region:
+            return f"fracture.regions[{i}].{name}"
+    if region:  # a region that the mesh does not have
+        return "fracture.regions"
+    return f"fracture.{param}"
+
+
+def _scene_error(sc, key: str, exc: Exception):
+    from . import scene
+
+    return scene.SceneError(sc.path, key, str(exc))
 
 
 class _Stages:
@@ -393,7 +468,11 @@ def _run_scripts(names: list[Path], extra: list[str], args) -> int:
 
 def _validate(args: argparse.Namespace) -> int:
     d = _scripts_dir(args.dir)
-    scripts = sorted(d.glob("fig[0-9][0-9]_*.py")) + [d / "elastica.py", d / "convergence.py"]
+    scripts = sorted(d.glob("fig[0-9][0-9]_*.py")) + [
+        d / "elastica.py",
+        d / "convergence.py",
+        d / "fracture.py",
+    ]
     if args.only:
         want = [w.strip() for w in args.only.split(",") if w.strip()]
         known = {p.stem.split("_")[0]: p for p in scripts}

@@ -38,6 +38,8 @@ __all__ = [
     "atomic_path",
     "FIELDS",
     "nodal_field",
+    "write_fracture_series",
+    "write_fracture_curve",
 ]
 
 
@@ -267,6 +269,100 @@ def write_png(
     ax.set_title(title or f"{solution.model.kind}: {field}")
     ax.set_xlabel(f"x   (deformed shape, displacements drawn x {scale:.3g})")
     ax.set_ylabel("y")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = atomic_path(path).with_suffix(".png")
+    plot.save(fig, tmp)
+    return _finish(tmp, path)
+
+
+def write_fracture_series(folder: str | Path, result, name: str = "fracture") -> Path:
+    """Write a fracture analysis as a VTU time series readable in ParaView.
+
+    One ``<name>_NNNN.vtu`` per snapshot (and the final state) in ``folder``, listed
+    with their event numbers as times in ``<name>.pvd`` (open that one). Each holds the
+    bonds as line cells with ``stiffness`` (1 intact, 0 broken), ``broken`` (0/1) and
+    ``strength`` (force), and the nodes with ``displacement`` (at the event's critical
+    load) and ``damage`` (mean stiffness loss of the node's bonds).
+
+    Returns
+    -------
+    Path
+        The ``.pvd`` file.
+    """
+    import meshio
+
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    mesh = result.model.mesh
+    bonds = mesh.topology.bonds
+    pts = np.c_[mesh.points, np.zeros(mesh.n_points)]
+    states = [(s.event, s.u, s.stiffness) for s in result.snapshots]
+    last = len(result.events)
+    states.append((last, result.u, result.stiffness))
+    entries = []
+    for k, (event, u, d) in enumerate(states):
+        out = meshio.Mesh(
+            pts,
+            [("line", bonds)],
+            point_data={
+                "displacement": np.c_[u, np.zeros(mesh.n_points)],
+                "damage": result.node_damage(d),
+            },
+            cell_data={
+                "stiffness": [d],
+                "broken": [(d <= 0).astype(np.int8)],
+                "strength": [result.strength],
+            },
+        )
+        file = f"{name}_{k:04d}.vtu"
+        _write_meshio(folder / file, out)
+        entries.append(f'    <DataSet timestep="{event}" part="0" file="{file}"/>')
+    pvd = "\n".join(
+        [
+            '<?xml version="1.0"?>',
+            '<VTKFile type="Collection" version="0.1">',
+            "  <Collection>",
+            *entries,
+            "  </Collection>",
+            "</VTKFile>",
+            "",
+        ]
+    )
+    path = folder / f"{name}.pvd"
+    tmp = atomic_path(path)
+    tmp.write_text(pvd)
+    return _finish(tmp, path)
+
+
+def write_fracture_curve(path: str | Path, result, title: str | None = None) -> Path:
+    """The load-displacement curve of a fracture analysis as a PNG, atomically: one point
+    per event (snap-backs as they come), the peak marked."""
+    from . import plot
+
+    path = Path(path)
+    d, p = result.curve()
+    fig, axes = plot.figure(1, 1, (7.0, 4.5))
+    ax = axes[0, 0]
+    ax.plot(np.r_[0.0, d], np.r_[0.0, p], "-", lw=0.8, color="C0")  # elastic from the origin
+    if result.peak is not None:
+        ax.plot(
+            [result.peak.control_displacement],
+            [result.peak.load],
+            "o",
+            color="C3",
+            label=f"peak {result.peak.load:.4g} at {result.peak.control_displacement:.4g}",
+        )
+        ax.legend()
+    what = (
+        "prescribed displacement" if result.control == "displacement" else "load-point displacement"
+    )
+    ax.set_xlabel(f"{what} (work-conjugate to the load)")
+    ax.set_ylabel("load (force)")
+    ax.set_xlim(left=0)
+    ax.set_ylim(bottom=0)
+    ax.set_title(
+        title or f"{result.model.kind}: {len(result.events)} events, {result.message}", fontsize=9
+    )
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = atomic_path(path).with_suffix(".png")
     plot.save(fig, tmp)

@@ -252,6 +252,10 @@ class DirectSolver:
         backward = float(np.max(np.abs(r))) / denom if denom > 0 else 0.0
         return x, {"iterations": steps, "residuals": residuals, "backward_error": backward}
 
+    def apply(self, b: np.ndarray) -> np.ndarray:
+        """``A^-1 b`` from the factors alone (no refinement); ``b`` (n,) or (n, k)."""
+        return self._apply(b)
+
     def _apply(self, b: np.ndarray) -> np.ndarray:
         if self.order is None:
             return self.lu.solve(b)

@@ -12,7 +12,15 @@ from .fem import compare
 from .mesh import Mesh
 from .mesh.locate import interpolate, snap_point
 
-__all__ = ["FIELDS", "CHECK_QUANTITIES", "nodal_field", "summary", "check_values"]
+__all__ = [
+    "FIELDS",
+    "CHECK_QUANTITIES",
+    "nodal_field",
+    "summary",
+    "check_values",
+    "fracture_checks",
+    "fracture_lines",
+]
 
 
 #: nodal fields for pictures
@@ -345,3 +353,54 @@ def _stress_extremes(s: np.ndarray) -> dict:
         "min_syy": float(syy.min()),
         "max_principal": float(p1.max()),
     }
+
+
+def fracture_checks(result, checks) -> list[dict]:
+    """Key numbers of a fracture analysis (``result.quantity``) against references: each
+    check (``name``, ``quantity``, ``reference``, ``source``) with ``value`` and
+    ``difference`` (relative to ``|reference|``, absolute where it is 0)."""
+    out = []
+    for c in checks:
+        value = result.quantity(c["quantity"])
+        ref = c["reference"]
+        if value is None:
+            diff = None
+        else:
+            diff = (value - ref) / abs(ref) if ref else value - ref
+        out.append({**c, "value": value, "difference": diff})
+    return out
+
+
+def fracture_lines(result, checks: list[dict], title: str, written=()) -> list[str]:
+    """The printed summary of a fracture analysis, one string per line."""
+    m, peak, t = result.model, result.peak, result.seconds
+    lines = [
+        f"{title}: fracture of {m.kind}, {m.mesh.n_points} nodes, {result.control} control",
+        f"  events    {len(result.events)}, bonds broken {len(result.broken)}",
+    ]
+    if peak is not None:
+        lines += [
+            f"  peak      load {peak.load:.6g} at displacement {peak.control_displacement:.6g} "
+            f"(load factor {peak.load_factor:.6g}, event {peak.index})",
+            f"  energy    released {result.dissipated:.6g} (force x length)",
+            f"  residual  largest relative residual {result.stats['max_residual']:.1e}",
+        ]
+    lines.append(f"  stopped   {result.message}")
+    for c in checks:
+        src = f" ({c['source']})" if c.get("source") else ""
+        if c["value"] is None:
+            diff, value = "no events", "-"
+        else:
+            value = f"{c['value']:.6g}"
+            rel = c["reference"] != 0
+            diff = f"{100 * c['difference']:+.1f} %" if rel else f"{c['difference']:+.6g}"
+        lines.append(
+            f"  check: {c['name']}: lattice {value}, reference {c['reference']:.6g}{src}: {diff}"
+        )
+    lines.append(
+        f"  time      strengths {t.get('strength', 0):.2f} s, events {t.get('events', 0):.2f} s "
+        f"({result.stats['events_per_second']:.1f} events/s, "
+        f"{result.stats['factorisations']} factorisations)"
+    )
+    lines += [f"  wrote     {w}" for w in written]
+    return lines

@@ -53,9 +53,15 @@ for scene in examples/*.toml; do
     grep -E "^ *check: " "$log/$name.txt" | sed 's/^ */   /'
     [ "$code" -eq 0 ] || fail "$name exited with $code"
     grep -q "check: " "$log/$name.txt" || fail "$name prints no key number against a reference"
-    for ext in vtu png json; do
-        [ -s "$out/$name.$ext" ] || fail "$name wrote no $name.$ext"
-    done
+    if grep -q "^\[fracture\]" "$scene"; then
+        for f in "${name}_fracture.json" "${name}_curve.png" "${name}_fracture/${name}.pvd"; do
+            [ -s "$out/$f" ] || fail "$name wrote no $f"
+        done
+    else
+        for ext in vtu png json; do
+            [ -s "$out/$name.$ext" ] || fail "$name wrote no $name.$ext"
+        done
+    fi
 done
 
 if grep -l "Traceback" "$log"/*.txt >/dev/null 2>&1; then

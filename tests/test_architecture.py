@@ -45,6 +45,7 @@ LAYERS = {
     "dvstatic.problem": 3,
     "dvstatic.solvers": 4,
     "dvstatic.parallel": 5,
+    "dvstatic.crack": 5,
     "dvstatic.post": 6,
     "dvstatic.fem": 6,
     "dvstatic.io": 6,

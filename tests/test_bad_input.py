@@ -209,6 +209,32 @@ CASES = [
         "amplitude must be >= 0",
     ),
     (
+        "fracture ft <= 0",
+        lambda: dv.fracture(
+            dv.DV(_lattice(), 1e5, 0.2), dv.Fix("left"), dv.Traction("right", (1.0, 0.0)), ft=0.0
+        ),
+        ValueError,
+        "ft must be a finite number > 0",
+    ),
+    (
+        "fracture gf too small for the mesh",
+        lambda: dv.fracture(
+            dv.DV(_lattice(), 1e5, 0.2),
+            dv.Fix("left"),
+            dv.Traction("right", (1.0, 0.0)),
+            ft=1.0,
+            gf=1e-12,
+        ),
+        ValueError,
+        "gf = .* is too small for this mesh",
+    ),
+    (
+        "fracture without a load",
+        lambda: dv.fracture(dv.DV(_lattice(), 1e5, 0.2), dv.Fix("left"), [], ft=1.0),
+        ValueError,
+        "nothing loads the body",
+    ),
+    (
         "strain on bounded mesh",
         lambda: dv.DV(_lattice(), 1e5, 0.2).internal_force(
             np.zeros((_lattice().n_points, 2)), strain=np.eye(2)

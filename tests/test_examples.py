@@ -224,3 +224,52 @@ def test_inclusion(tmp_path):
     sxx = mean + dev
     assert d["probes"]["fe_stress"][0][0][0] == pytest.approx(sxx, rel=0.02)
     assert d["probes"]["stress"][0][0][0] == pytest.approx(sxx, rel=0.04)
+
+
+def test_notched_beam_fracture_scene(tmp_path):
+    """[fracture]: the event-driven analysis from the command line, with its JSON, curve,
+    VTU series (a ParaView collection) and checks."""
+    out = tmp_path / "nb"
+    cmd = [
+        sys.executable,
+        "-m",
+        "dvstatic",
+        "run",
+        str(EXAMPLES / "notched_beam.toml"),
+        "--out",
+        str(out),
+        "--quiet",
+        "--set",
+        "mesh.h=20.0",
+    ]
+    proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
+    assert proc.returncode == 0, proc.stderr
+    assert "Traceback" not in proc.stderr
+    d = json.loads((out / "notched_beam_fracture.json").read_text())
+    assert d["control"] == "displacement" and d["n_events"] == len(d["events"]) > 50
+    assert d["stop_reason"] == "load_drop"
+    assert {c["name"] for c in d["checks"]} == {"peak load", "energy released"}
+    assert "check: peak load" in proc.stdout
+    assert (out / "notched_beam_curve.png").stat().st_size > 1000
+    pvd = (out / "notched_beam_fracture" / "notched_beam.pvd").read_text()
+    files = [line.split('file="')[1].split('"')[0] for line in pvd.splitlines() if "file=" in line]
+    assert len(files) > 2 and all((out / "notched_beam_fracture" / f).exists() for f in files)
+    import meshio
+
+    last = meshio.read(out / "notched_beam_fracture" / files[-1])
+    assert last.cell_data["broken"][0].sum() == d["n_broken"]
+    assert np.all(np.isfinite(last.point_data["damage"]))
+
+
+def test_fracture_scene_errors_name_the_key(tmp_path):
+    scene = (EXAMPLES / "notched_beam.toml").read_text().replace("ft = 3.33", "ft = -3.33")
+    path = tmp_path / "bad.toml"
+    path.write_text(scene)
+    proc = subprocess.run(
+        [sys.executable, "-m", "dvstatic", "run", str(path), "--out", str(tmp_path / "o")],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert proc.returncode == 2
+    assert "fracture.ft" in proc.stderr and "Traceback" not in proc.stderr

@@ -149,3 +149,15 @@ def test_quick_runs_never_write_the_committed_results():
             # one command line for all: their own parsers wrote quick runs into out/
             assert "parser(__doc__)" in text, script.name
             assert "ArgumentParser(" not in text, script.name
+
+
+@pytest.mark.slow
+def test_fracture(out):
+    _run("fracture", out)
+    d = _json(out, "fracture")
+    assert d["direct_tension"]["DV"] == pytest.approx(1.0, abs=0.02)
+    for row in d["brazilian"]["rows"]:
+        assert row["splitting_over_ft"] == pytest.approx(1.0, abs=0.15)
+        assert row["near_diameter"] > 0.5
+    assert d["cohesive"]["peak_N"] == pytest.approx(853, rel=0.02)
+    assert d["speed"][0]["same_sequence"]

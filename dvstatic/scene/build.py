@@ -198,6 +198,49 @@ class Scene:
                     f"unknown boundary part {name!r}; known parts: {known}",
                 )
 
+    def fracture_options(self) -> dict | None:
+        """Keywords of :func:`dvstatic.fracture` from ``[fracture]`` (None without it)."""
+        fr = self.data["fracture"]
+        if fr is None:
+            return None
+        from ..crack import Weibull
+
+        ft, gf = fr["ft"], fr["gf"]
+        regions = fr["regions"]
+        if regions:
+            ft = {"default": ft, **{r["name"]: r["ft"] for r in regions}}
+            with_gf = [r for r in regions if r["gf"] is not None]
+            if with_gf and gf is None:
+                raise SceneError(
+                    self.path,
+                    "fracture.gf",
+                    "a region sets gf: give the default gf too (softening needs it everywhere)",
+                )
+            if gf is not None:
+                gf = {"default": gf, **{r["name"]: r["gf"] for r in with_gf}}
+        if fr["snapshots"] < 1:
+            raise SceneError(self.path, "fracture.snapshots", "must be >= 1")
+        try:
+            weibull = None
+            if fr["weibull_m"] is not None:
+                weibull = Weibull(fr["weibull_m"], fr["weibull_length"], fr["seed"])
+        except InputError as exc:
+            key = {"weibull.m": "weibull_m", "weibull.length": "weibull_length"}.get(
+                exc.param, "seed"
+            )
+            raise self._err("fracture." + key, exc) from None
+        every = max(1, fr["max_events"] // max(fr["snapshots"], 1))
+        return dict(
+            ft=ft,
+            gf=gf,
+            max_events=fr["max_events"],
+            criterion=fr["criterion"],
+            teeth=fr["teeth"],
+            weibull=weibull,
+            stop_load_ratio=fr["stop_load_ratio"],
+            snapshot_every=every,
+        )
+
     def solve_options(self) -> dict:
         """Keyword options of :func:`dvstatic.solve` from ``[solver]``."""
         s = self.data["solver"]

@@ -57,6 +57,9 @@ REGION = {
     "vertices": F("points", "polygon corners (length)"),
 }
 
+#: key numbers of a fracture analysis that ``[[fracture.checks]]`` can compare
+FRACTURE_QUANTITIES = ("peak_load", "peak_displacement", "released_energy", "first_load")
+
 #: a linear profile between two points: rows [x, y, value...]
 PROFILE_DOC = (
     "linear profile [[x0, y0, {v}], [x1, y1, {v}]]: the value at a point is interpolated "
@@ -244,6 +247,72 @@ SCHEMA: dict[str, F] = {
         },
     ),
     "solver": F("table", "how to solve (the options of dv.solve)", default={}, schema=None),
+    "fracture": F(
+        "table",
+        "fracture by bond breaking (dv.fracture) instead of one elastic solve: the loads and "
+        "prescribed displacements are scaled event by event; writes <name>_fracture.json, "
+        "<name>_curve.png and the VTU series <name>_fracture/<name>.pvd ([solver] and "
+        "output.fe_compare, field, stress, probes, part_stress and checks do not apply)",
+        default=None,
+        schema={
+            "ft": F("number", "tensile strength (stress units)", required=True),
+            "gf": F(
+                "number",
+                "fracture energy (energy per crack area): saw-tooth softening of cracked bonds; "
+                "omit for brittle bonds",
+            ),
+            "max_events": F("int", "stop after this many events", default=1000),
+            "criterion": F(
+                "string",
+                "stress: normal stress on the bond's face (Rankine); tension: the bond's "
+                "tension (raised by compression along the face)",
+                default="stress",
+                choices=("stress", "tension"),
+            ),
+            "teeth": F("int", "saw-tooth steps of a cracked bond (with gf)", default=30),
+            "weibull_m": F(
+                "number", "Weibull modulus of a random strength field (omit: uniform strength)"
+            ),
+            "weibull_length": F(
+                "number",
+                "correlation length of the field (length; 0: independent bonds)",
+                default=0.0,
+            ),
+            "seed": F("int", "seed of the random field", default=0),
+            "stop_load_ratio": F(
+                "number", "stop once the load falls below this fraction of the peak", default=0.01
+            ),
+            "snapshots": F("int", "states kept for the VTU series (about)", default=50),
+            "checks": F(
+                "tables",
+                "key numbers of the analysis printed (and written to the JSON) against a "
+                "reference value",
+                default=[],
+                schema={
+                    "name": F("string", "what is checked (a label)", required=True),
+                    "quantity": F(
+                        "string",
+                        "peak_load, peak_displacement (at the peak), released_energy (all "
+                        "events) or first_load (the first event's load)",
+                        required=True,
+                        choices=FRACTURE_QUANTITIES,
+                    ),
+                    "reference": F("number", "the value to compare with", required=True),
+                    "source": F("string", "where the reference comes from", default=""),
+                },
+            ),
+            "regions": F(
+                "tables",
+                "other strengths on mesh regions (a bond between regions takes the smaller)",
+                default=[],
+                schema={
+                    "name": F("string", "region name", required=True),
+                    "ft": F("number", "tensile strength there", required=True),
+                    "gf": F("number", "fracture energy there (default: the table's gf)"),
+                },
+            ),
+        },
+    ),
     "output": F(
         "table",
         "what to write",

@@ -1,0 +1,165 @@
+"""Results of a fracture analysis: the events, the load-displacement curve, snapshots."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+__all__ = ["Event", "Snapshot", "FractureResult"]
+
+
+@dataclass(frozen=True)
+class Event:
+    """One bond reaching its strength.
+
+    Attributes
+    ----------
+    index : int
+        Event number (0 first).
+    load_factor : float
+        The loads (and prescribed displacements) are ``load_factor`` times the given ones.
+    bond : int
+        The bond that reached its strength.
+    control_displacement : float
+        Displacement work-conjugate to the load (length): force control, ``f . u /
+        F_ref`` (the mean displacement of the loaded points along their loads);
+        displacement control, the largest prescribed displacement.
+    load : float
+        Force work-conjugate to ``control_displacement`` (force): ``load_factor *
+        F_ref``, or the reactions' work on the prescribed displacements over the largest.
+    tooth : int
+        Saw-tooth step the bond reached (0: first crack).
+    broken : bool
+        True if the bond is removed by this event (its last tooth).
+    residual : float
+        Relative residual of the equilibrium solve of this state.
+    released : float
+        Energy released by the event at fixed control displacement (force x length).
+    elongation : float
+        The bond's elongation at the event (length).
+    spring_lost : float
+        The part of the bond's spring the event took: its stiffness factor before the
+        event minus after it.
+    """
+
+    index: int
+    load_factor: float
+    bond: int
+    control_displacement: float
+    load: float
+    tooth: int
+    broken: bool
+    residual: float
+    released: float = float("nan")
+    elongation: float = float("nan")
+    spring_lost: float = float("nan")
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """The state at an event: displacement ``u`` (N, 2) at its critical load and the bond
+    stiffness factors ``stiffness`` (n_bonds,) (1 intact, 0 broken) before the event."""
+
+    event: int
+    u: np.ndarray
+    stiffness: np.ndarray
+
+
+@dataclass(frozen=True)
+class FractureResult:
+    """What :func:`dvstatic.fracture` returns.
+
+    Attributes
+    ----------
+    events : tuple of Event
+    u : ndarray, shape (N, 2)
+        Displacement at the last event's critical load.
+    stiffness : ndarray, shape (n_bonds,)
+        Bond stiffness factors at the end (1 intact, 0 broken).
+    broken : ndarray of int
+        Broken bonds, in the order they broke.
+    snapshots : tuple of Snapshot
+    stop_reason : str
+        "max_events", "load_drop", "separated", "interrupted" or "no_tension" (no
+        unbroken bond is loaded towards its strength).
+    message : str
+        One line saying why the analysis stopped.
+    control : str
+        "force" or "displacement".
+    strength : ndarray, shape (n_bonds,)
+        First-crack strength of every bond (force).
+    seconds : dict
+        Wall time per stage.
+    stats : dict
+        Factorisations, largest update rank, events per second.
+    """
+
+    model: object
+    events: tuple
+    u: np.ndarray
+    stiffness: np.ndarray
+    broken: np.ndarray
+    snapshots: tuple
+    stop_reason: str
+    message: str
+    control: str
+    strength: np.ndarray
+    seconds: dict = field(default_factory=dict)
+    stats: dict = field(default_factory=dict)
+
+    def curve(self) -> tuple[np.ndarray, np.ndarray]:
+        """The load-displacement curve: ``(control_displacement, load)`` of every event."""
+        d = np.array([e.control_displacement for e in self.events])
+        p = np.array([e.load for e in self.events])
+        return d, p
+
+    @property
+    def peak(self) -> Event | None:
+        """The event with the largest load (None without events)."""
+        return max(self.events, key=lambda e: e.load) if self.events else None
+
+    @property
+    def dissipated(self) -> float:
+        """Energy released by all events (force x length; per the model's thickness)."""
+        return float(sum(e.released for e in self.events if np.isfinite(e.released)))
+
+    def node_damage(self, stiffness: np.ndarray | None = None) -> np.ndarray:
+        """Damage per node (N,): the mean loss of stiffness ``1 - d`` of its bonds."""
+        d = self.stiffness if stiffness is None else stiffness
+        mesh = self.model.mesh
+        b = mesh.topology.bonds
+        n = mesh.n_points
+        loss = np.bincount(b.ravel(), np.repeat(1.0 - d, 2), n)
+        return loss / np.maximum(np.bincount(b.ravel(), minlength=n), 1)
+
+    def quantity(self, name: str) -> float | None:
+        """A key number: ``peak_load``, ``peak_displacement``, ``released_energy`` or
+        ``first_load`` (None without events)."""
+        if not self.events:
+            return None
+        values = {
+            "peak_load": lambda: self.peak.load,
+            "peak_displacement": lambda: self.peak.control_displacement,
+            "released_energy": lambda: self.dissipated,
+            "first_load": lambda: self.events[0].load,
+        }
+        if name not in values:
+            raise ValueError(f"unknown quantity {name!r}; expected one of {sorted(values)}")
+        return float(values[name]())
+
+    def to_dict(self) -> dict:
+        """JSON-ready summary: the events, the curve, why it stopped, timings."""
+        peak = self.peak
+        return {
+            "control": self.control,
+            "stop_reason": self.stop_reason,
+            "message": self.message,
+            "n_events": len(self.events),
+            "n_broken": int(len(self.broken)),
+            "peak": None if peak is None else asdict(peak),
+            "dissipated": self.dissipated,
+            "events": [asdict(e) for e in self.events],
+            "seconds": self.seconds,
+            "stats": self.stats,
+        }

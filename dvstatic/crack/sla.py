@@ -1,0 +1,457 @@
+"""Event-driven fracture: sequentially linear analysis (SLA) with factorisation updates.
+
+Each event solves the damaged lattice for the reference loads (one unit of the load
+factor), finds the bond whose criterion (:mod:`.criterion`) is the largest fraction of
+its current strength, scales the loads so that this bond reaches its strength exactly,
+records the state and then softens or removes that bond. Every recorded state is an
+exact equilibrium of the linear lattice at its load factor; snap-backs appear in the
+load-displacement curve as they come (the load factor of the next event may be lower).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import numbers
+import time
+
+import numpy as np
+
+from ..errors import InputError
+from ..lattice import VoronoiModel
+from ..lattice.damage import split as _split
+from ..linalg import check_restrained
+from ..problem import constraints, load_vector
+from ..problem.loads import nodal_forces
+from ..problem.select import as_list
+from .criterion import CRITERIA, Measure, per_bond, strengths
+from .pieces import Pieces, bond_triangles
+from .result import Event, FractureResult, Snapshot
+from .strength import Weibull, smallest_gf, teeth_at
+from .updates import UpdatedSolver
+
+log = logging.getLogger(__name__)
+
+__all__ = ["fracture", "EQUILIBRIUM_TOL"]
+
+#: relative residual every recorded state must reach
+EQUILIBRIUM_TOL = 1e-10
+#: a straight crack of length L cuts bonds whose Voronoi faces add up to 4 L / pi on
+#: average (Buffon: sum_e r_e l_e |sin theta_e| / A with sum_e r_e l_e = 2 A and the mean
+#: |sin| 2 / pi): each bond gets this share of gf times its face
+BUFFON = np.pi / 4
+#: largest low-rank update (columns) before the stiffness is factorised afresh
+MAX_RANK = 3000
+#: secant stiffness (relative to the initial one) below which the body is a mechanism
+MECHANISM = 1e-6
+
+
+def _reference(model, supports, loads):
+    """Constrained dofs, prescribed values, forces and the control of the problem."""
+    mesh = model.mesh
+    dofs, values = constraints(mesh, supports)
+    check_restrained(mesh.points, dofs)
+    loads = as_list(loads, "Traction, Pressure, BodyForce or PointLoad") if loads else []
+    f = load_vector(mesh, loads, thickness=model.t) if loads else np.zeros(2 * mesh.n_points)
+    if np.any(values):
+        return dofs, values, f, "displacement", float(np.max(np.abs(values)))
+    if not np.any(f):
+        raise InputError(
+            "nothing loads the body: give loads or a non-zero prescribed displacement "
+            "(Fix(..., y=-1e-3)); they are scaled by the load factor",
+            "loads",
+        )
+    ref = 0.0
+    for load in loads:
+        fk = nodal_forces(mesh, [load], thickness=model.t).reshape(-1, 2)
+        resultant = float(np.hypot(*fk.sum(axis=0)))
+        total = float(np.hypot(fk[:, 0], fk[:, 1]).sum())
+        # a self-balanced load (a pressure in a hole) counts half its total nodal force
+        ref += resultant if resultant > 1e-6 * total else 0.5 * total
+    return dofs, values, f, "force", ref
+
+
+def _state(solver, sp_, d, control, ref, f):
+    """Solve the damaged lattice per unit load factor: displacement, relative residual,
+    and the conjugate (load, displacement) per unit load factor."""
+    w, g = sp_.factors(d)
+    x, res = solver.solve(w, g, EQUILIBRIUM_TOL)
+    if control == "force":
+        return x, res, ref, float(f @ x) / ref
+    kx = solver.K0 @ x
+    if solver.rank:
+        kx = kx + solver.delta_full(x, w, g)
+    reaction = (kx - f)[solver.dofs]
+    return x, res, float(reaction @ solver.values) / ref, ref
+
+
+def _check_options(model, weibull, criterion: str, opts: dict) -> None:
+    if not isinstance(model, VoronoiModel):
+        raise TypeError(f"model must be a DV or RV model, got {type(model).__name__}")
+    if model.mesh.is_periodic:
+        raise InputError("fracture needs a bounded mesh, got a periodic one", "model")
+    for name, v, low, high in (
+        ("max_events", opts["max_events"], 1, None),
+        ("teeth", opts["teeth"], 2, 1000),
+        ("max_rank", opts["max_rank"], 0, MAX_RANK),
+        (
+            "snapshot_every",
+            1 if opts["snapshot_every"] is None else opts["snapshot_every"],
+            1,
+            None,
+        ),
+    ):
+        ok = isinstance(v, numbers.Integral) and not isinstance(v, bool) and v >= low
+        if not ok or (high is not None and v > high):
+            top = "" if high is None else f" and <= {high}"
+            raise InputError(f"{name} must be an integer >= {low}{top}, got {v!r}", name)
+    for name, v, closed in (
+        ("stop_load_ratio", opts["stop_load_ratio"], False),
+        ("fragment", opts["fragment"], True),
+    ):
+        ok = isinstance(v, numbers.Real) and not isinstance(v, bool) and math.isfinite(v)
+        if not ok or v < 0 or (v > 1 if closed else v >= 1):
+            bound = "[0, 1]" if closed else "[0, 1)"
+            raise InputError(f"{name} must lie in {bound}, got {v!r}", name)
+    if weibull is not None and not isinstance(weibull, Weibull):
+        raise TypeError(f"weibull must be a dvstatic.crack.Weibull, got {type(weibull).__name__}")
+    if criterion not in CRITERIA:
+        raise InputError(f"criterion must be one of {CRITERIA}, got {criterion!r}", "criterion")
+
+
+def fracture(
+    model: VoronoiModel,
+    supports,
+    loads=None,
+    *,
+    ft,
+    gf=None,
+    max_events: int = 1000,
+    weibull: Weibull | None = None,
+    criterion: str = "stress",
+    teeth: int = 30,
+    stop_load_ratio: float = 0.01,
+    fragment: float = 0.01,
+    max_rank: int = 240,
+    snapshot_every: int | None = None,
+    progress: bool = False,
+) -> FractureResult:
+    """Quasi-static fracture by bond breaking, event by event (sequentially linear).
+
+    Parameters
+    ----------
+    model : DV or RV
+        The lattice (its calibration, thickness and materials).
+    supports : Fix or list of Fix
+        Supports; non-zero prescribed values make the analysis displacement controlled.
+    loads : load or list of loads, optional
+        Reference loads (``Traction``, ``Pressure``, ``BodyForce``, ``PointLoad``). The
+        loads and the prescribed displacements are multiplied by the load factor.
+    ft : float or dict
+        Tensile strength (stress units), or ``{"default": ft, region: ft_r}``.
+    gf : float or dict, optional
+        Fracture energy (energy per unit crack area, e.g. N/m): a cracked bond softens
+        in ``teeth`` saw-tooth steps. None: brittle bonds (removed at their strength).
+    max_events : int
+        Stop after this many events.
+    weibull : Weibull, optional
+        Random strength field.
+    criterion : {"stress", "tension"}
+        What an intact bond compares with its strength: the normal stress across its
+        Voronoi face (the default: a Rankine criterion, unaffected by compression along
+        the face) or its tension (which compression along the face raises: a lattice
+        under tension ``s`` and compression ``3 s`` cracks at about ``ft / 2.6``).
+    teeth : int
+        Saw-tooth steps of the softening (>= 2; with ``gf`` only).
+    stop_load_ratio : float
+        Stop once the load falls below this fraction of the peak (0 to never).
+    fragment : float
+        A piece that is no longer held stops the analysis if it carries load or has more
+        than this fraction of the nodes; smaller unloaded fragments are left hanging.
+    max_rank : int
+        Largest low-rank update before the stiffness is factorised afresh (0:
+        refactorise at every event, the reference path).
+    snapshot_every : int, optional
+        Keep the state every this many events (default: about 50 snapshots).
+    progress : bool
+        Show a progress bar of the events.
+
+    Returns
+    -------
+    FractureResult
+
+    Raises
+    ------
+    InputError
+        Bad ``ft``, ``gf`` (or one too small for the mesh), no load, supports that leave a
+        rigid motion free, a periodic mesh.
+    """
+    opts = dict(
+        max_events=max_events,
+        stop_load_ratio=stop_load_ratio,
+        fragment=fragment,
+        max_rank=max_rank,
+        snapshot_every=snapshot_every,
+        progress=progress,
+        teeth=teeth,
+    )
+    _check_options(model, weibull, criterion, opts)
+    timings: dict[str, float] = {}
+    t_start = time.perf_counter()
+    dofs, values, f, control, ref = _reference(model, supports, loads)
+    sp_ = _split(model)
+    measure = Measure(model, sp_, criterion)
+    s0, s_tension = strengths(model, measure, ft, weibull, timings)
+    energy = None if gf is None else _energies(model, gf, s_tension)
+    return _run(
+        model, sp_, measure, s0, energy, (dofs, values, f, control, ref), timings, t_start, opts
+    )
+
+
+def _energies(model, gf, s_tension) -> np.ndarray:
+    """Energy each bond's teeth release (force x length), see :mod:`.strength`.
+
+    Raises
+    ------
+    InputError
+        If ``gf`` is too small for the mesh (a bond would snap back on its own).
+    """
+    geo = model.geometry
+    # the crack face of a bond: its Voronoi side (bounded below on obtuse triangles)
+    face = np.maximum(geo.r, 0.2 * geo.length)
+    gfb = per_bond(model, gf, "gf")
+    need = smallest_gf(s_tension, model.operator.spring, face, model.t)
+    if np.any(gfb <= need):
+        e = int(np.argmax(need / gfb))
+        raise InputError(
+            f"gf = {gfb[e]:.4g} is too small for this mesh: bond {e} would store more "
+            f"elastic energy at its strength than gf gives its face; use gf > "
+            f"{float(np.max(need)):.4g} or a finer mesh (the bound is about "
+            "ft^2 h / (2 E) and falls with the bond length h)",
+            "gf",
+        )
+    return BUFFON * gfb * model.t * face
+
+
+class _Bonds:
+    """The damage state of the bonds: stiffness factors, teeth and thresholds."""
+
+    def __init__(self, strength, spring, energy, teeth: int):
+        n = len(strength)
+        self.d = np.ones(n)
+        self.tooth = np.zeros(n, dtype=np.int64)
+        self.threshold = np.asarray(strength, float).copy()
+        self.spring, self.energy, self.teeth = spring, energy, teeth
+        self.steps: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+
+    def save(self, e: int):
+        """All stiffness factors and bond ``e``'s tooth state, for :meth:`restore`."""
+        return self.d.copy(), int(self.tooth[e]), float(self.threshold[e]), e in self.steps
+
+    def restore(self, e: int, saved) -> None:
+        d, tooth, threshold, had_steps = saved
+        self.d[:] = d
+        self.tooth[e], self.threshold[e] = tooth, threshold
+        if not had_steps:
+            self.steps.pop(e, None)
+
+    def critical(self, stress, elongation):
+        """The bond closest to its threshold and the load factor that brings it there."""
+        value = np.where(self.d >= 1.0, stress, elongation)
+        ratio = np.where(self.d > 0, value / self.threshold, 0.0)
+        ratio[~(ratio > 0)] = 0.0
+        e = int(np.argmax(ratio))
+        return e, (1.0 / ratio[e] if ratio[e] > 0 else np.inf)
+
+    def advance(self, e: int, peak: float) -> bool:
+        """Soften or remove bond ``e`` cracking at elongation ``peak``; True if removed."""
+        if self.d[e] >= 1.0:
+            en = None if self.energy is None else self.energy[e]
+            if en is None or peak <= 0 or en <= 0.5 * self.spring[e] * peak**2:
+                self.d[e] = 0.0
+                return True
+            d, delta = teeth_at(self.spring[e], peak, en, self.teeth)
+            self.steps[e] = (d[0], delta[0])
+        self.tooth[e] += 1
+        if self.tooth[e] >= self.teeth:
+            self.d[e] = 0.0
+            return True
+        d, delta = self.steps[e]
+        self.d[e] = d[self.tooth[e]]
+        self.threshold[e] = delta[self.tooth[e]]
+        return False
+
+
+class _Analysis:
+    """The event loop of :func:`fracture`: state, one event, the result."""
+
+    def __init__(self, model, sp_, measure, s0, energy, problem, opts):
+        self.dofs, self.values, self.f, self.control, self.ref = problem
+        self.model, self.sp, self.measure, self.s0, self.opts = model, sp_, measure, s0, opts
+        self.bonds = _Bonds(s0, model.operator.spring, energy, opts["teeth"])
+        self.solver = UpdatedSolver(
+            model.mesh, sp_, self.dofs, self.values, self.f, max_rank=opts["max_rank"]
+        )
+        self.pieces = Pieces(model, self.dofs, self.values, self.f, opts["fragment"])
+        self.bond_tris = bond_triangles(model.mesh)
+        self.every = opts["snapshot_every"] or max(1, opts["max_events"] // 50)
+        self.events: list[Event] = []
+        self.snaps: list[Snapshot] = []
+        self.broken: list[int] = []
+        self.peak = 0.0
+
+    def start(self) -> None:
+        self.solver.rebase(*self.sp.factors(self.bonds.d))
+        self._solve()
+        self.x_last = self.x
+        self.k_initial = self.p_ref / self.u_ref
+
+    def _solve(self) -> None:
+        self.x, self.res, self.p_ref, self.u_ref = _state(
+            self.solver, self.sp, self.bonds.d, self.control, self.ref, self.f
+        )
+
+    def step(self, k: int):
+        """Event ``k``; returns (reason, message) if the analysis stops, else None. Ctrl-C
+        during the event undoes its bond change (the result stays consistent)."""
+        bonds, x = self.bonds, self.x
+        w, g = self.sp.factors(bonds.d)
+        intact = np.all(bonds.d[self.sp.tri_bonds] >= 1.0, axis=1).astype(float)
+        elongation = self.measure.elongation(x)
+        e, lam = bonds.critical(self.measure(x, w, g, intact), elongation)
+        if not np.isfinite(lam):
+            return "no_tension", "no unbroken bond is loaded towards its strength"
+        saved = bonds.save(e)
+        before = (self.res, self.p_ref, self.u_ref)
+        try:
+            removed = bonds.advance(e, lam * float(elongation[e]))
+            self.solver.touch(self.bond_tris[e])
+            if self.opts["max_rank"] == 0:
+                self.solver.rebase(*self.sp.factors(bonds.d))
+            self._solve()
+        except KeyboardInterrupt:  # the event did not happen: undo the bond's change
+            bonds.restore(e, saved)
+            raise
+        res, p_ref, u_ref = before
+        delta = lam * u_ref
+        # energy released at fixed control displacement: 1/2 delta (P - P')
+        after = delta * self.p_ref / self.u_ref if self.u_ref else 0.0
+        ev = Event(
+            index=k,
+            load_factor=lam,
+            bond=e,
+            control_displacement=delta,
+            load=lam * p_ref,
+            tooth=int(saved[1]),
+            broken=removed,
+            residual=res,
+            released=0.5 * delta * (lam * p_ref - after),
+            elongation=lam * float(elongation[e]),
+            spring_lost=float(saved[0][e] - bonds.d[e]),
+        )
+        if k % self.every == 0:
+            self.snaps.append(Snapshot(k, (lam * x).reshape(-1, 2), saved[0]))
+        self.events.append(ev)
+        self.x_last = lam * x
+        if removed:
+            self.broken.append(e)
+        self.peak = max(self.peak, ev.load)
+        return _stop(
+            self.pieces,
+            bonds.d,
+            removed,
+            self.model.mesh.topology.bonds[e],
+            self.model,
+            ev,
+            self.peak,
+            self.res,
+            self.opts["stop_load_ratio"],
+            k,
+            self.p_ref / self.u_ref / self.k_initial,
+        )
+
+    def result(self, reason, message, timings, loop: float) -> FractureResult:
+        mesh, events = self.model.mesh, self.events
+        return FractureResult(
+            model=self.model,
+            events=tuple(events),
+            u=self.x_last.reshape(-1, 2) if events else np.zeros((mesh.n_points, 2)),
+            stiffness=self.bonds.d,
+            broken=np.array(self.broken, dtype=np.int64),
+            snapshots=tuple(self.snaps),
+            stop_reason=reason,
+            message=message,
+            control=self.control,
+            strength=self.s0,
+            seconds=timings,
+            stats={
+                "factorisations": self.solver.factorisations,
+                "max_rank": self.opts["max_rank"],
+                "events_per_second": len(events) / loop if loop > 0 else float("nan"),
+                "max_residual": max((ev.residual for ev in events), default=0.0),
+            },
+        )
+
+
+def _run(model, sp_, measure, s0, energy, problem, timings, t_start, opts) -> FractureResult:
+    """The event loop (see :func:`fracture`); Ctrl-C keeps the events so far."""
+    run = _Analysis(model, sp_, measure, s0, energy, problem, opts)
+    n = opts["max_events"]
+    reason, message = "max_events", f"stopped after max_events = {n} events"
+    t0 = time.perf_counter()
+    timings["setup"] = t0 - t_start
+    run.start()
+    bar = _bar(opts["progress"], n)
+    try:
+        for k in range(n):
+            stop = run.step(k)
+            if bar is not None:
+                bar.update(1)
+                bar.set_postfix(
+                    load=f"{run.events[-1].load:.4g}" if run.events else "",
+                    broken=len(run.broken),
+                    refresh=False,
+                )
+            if stop is not None:
+                reason, message = stop
+                break
+    except KeyboardInterrupt:
+        reason, message = "interrupted", f"interrupted after {len(run.events)} events"
+        log.warning("fracture: %s; returning what was computed", message)
+    finally:
+        if bar is not None:
+            bar.close()
+    loop = time.perf_counter() - t0
+    timings["events"] = loop
+    timings["factorisation"] = run.solver.factor_seconds
+    log.info("fracture: %d events, %d bonds broken, %s", len(run.events), len(run.broken), message)
+    return run.result(reason, message, timings, loop)
+
+
+def _stop(pieces, d, removed, ends, model, ev, peak, res, ratio, k, stiffness):
+    """(reason, message) if the analysis must stop after this event, else None."""
+    if removed:
+        msg = pieces.hanging(d, ends, model.operator.spring) or pieces.check(d)
+        if msg is not None:
+            return "separated", msg
+    if not stiffness > MECHANISM:
+        return "separated", (
+            f"after event {k} the secant stiffness is {stiffness:.1e} of the initial one: "
+            "the body hangs on broken or nearly broken bonds (a mechanism)"
+        )
+    if ratio and peak > 0 and ev.load < ratio * peak:
+        return "load_drop", f"the load fell below {ratio:g} of the peak {peak:.6g}"
+    if not np.isfinite(res) or res > 1e-6:
+        return "separated", (
+            f"the damaged stiffness became singular at event {k} (relative residual "
+            f"{res:.2e}): the body has come apart"
+        )
+    return None
+
+
+def _bar(progress: bool, total: int):
+    if not progress:
+        return None
+    from tqdm import tqdm
+
+    return tqdm(total=total, desc="events", unit="event")

@@ -1,0 +1,186 @@
+"""The linear lattice split into triangles, with damage: what breaking a bond means.
+
+The linear stiffness is a sum over triangles (:mod:`dvstatic.lattice.stabilise`)::
+
+    K = sum_T B_T^T Q_T B_T,     Q_T = diag(w_T) + g_T M_T,
+
+``B_T`` (3, 6) the elongation gradients of the triangle's three bonds, ``w_T`` their
+spring shares (``tri_weight * spring``), ``g_T`` the triangle's coupling stiffness and
+``M_T`` its symmetric coupling matrix (half-side gradients ``dr = M_T B_T``). The tension
+of bond e is ``T_e = sum_{T at e} (Q_T B_T u_T)_e``; ``K u = sum_e T_e grad(delta_e)``
+exactly, so these tensions are in equilibrium with the nodal forces.
+
+Damage keeps that form. A bond with stiffness factor ``d_e`` (1 intact, 0 broken) keeps
+``d_e`` of its spring in both its triangles, and a triangle one of whose bonds is damaged
+(``d_e < 1``) loses its Voronoi coupling (``g_T = 0``): the Voronoi side of a cracked
+bond is no longer a cell face, and a coupling without the spring it modulates would make
+``Q_T`` indefinite. Every damaged triangle is then a set of plain springs, so each
+``Q_T`` stays positive semi-definite (intact triangles are positive definite by the
+stabilisation), ``K`` stays symmetric positive semi-definite, a broken bond carries no
+tension, and damage never raises a stiffness. A broken bond keeps a tiny residual
+fraction of its spring (``RESIDUAL``) so that a piece hanging on a broken bond is not an
+exact mechanism; pieces held by nothing else are detected from the bond graph.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from . import assembly
+from . import geometry as _geometry
+from .kinematics import edge_frames, elongation_gradients
+from .stabilise import coupling_matrices
+
+if TYPE_CHECKING:
+    import scipy.sparse as sp
+
+    from .models import VoronoiModel
+
+__all__ = ["RESIDUAL", "TriangleSplit", "split"]
+
+#: stiffness fraction a broken bond keeps (numerical only: no tension is ever read from it)
+RESIDUAL = 1e-9
+
+
+@dataclass(eq=False)
+class TriangleSplit:
+    """The per-triangle pieces of a model's linear stiffness.
+
+    Attributes
+    ----------
+    tri_bonds : (M, 3) int, the bond of every local edge
+    b : (M, 3, 6) elongation gradients (dimensionless)
+    w : (M, 3) spring share of every local edge (force / length)
+    g : (M,) coupling stiffness (force / length)
+    m : (M, 3, 3) symmetric coupling matrices (dimensionless)
+    dofs : (M, 6) int, the interleaved dofs of every triangle's vertices
+    ends : (n_bonds, 2) int, the end nodes of every bond
+    """
+
+    tri_bonds: np.ndarray
+    b: np.ndarray
+    w: np.ndarray
+    g: np.ndarray
+    m: np.ndarray
+    dofs: np.ndarray
+    ends: np.ndarray
+
+    @property
+    def n_bonds(self) -> int:
+        return int(self.tri_bonds.max()) + 1
+
+    def factors(self, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Spring shares ``w`` (M, 3) and couplings ``g`` (M,) for bond stiffness factors
+        ``d`` (n_bonds,) in [0, 1] (broken bonds keep ``RESIDUAL``)."""
+        dt = np.maximum(d, RESIDUAL)[self.tri_bonds]
+        return self.w * dt, self.g * np.min(d[self.tri_bonds], axis=1)
+
+    def q(self, w: np.ndarray, g: np.ndarray, sl=slice(None)) -> np.ndarray:
+        """The 3x3 bond matrices ``Q_T = diag(w_T) + g_T M_T`` of triangles ``sl``."""
+        q = g[sl, None, None] * self.m[sl]
+        idx = np.arange(3)
+        q[:, idx, idx] += w[sl]
+        return q
+
+    def forces(self, u: np.ndarray, w: np.ndarray, g: np.ndarray) -> np.ndarray:
+        """Every triangle's share of its bonds' tensions, (M, 3), for displacement ``u``
+        (2N,)."""
+        elong = np.matmul(self.b, u[self.dofs][:, :, None])  # (M, 3, 1)
+        return np.matmul(self.q(w, g), elong)[:, :, 0]
+
+    def tension(self, u: np.ndarray, w: np.ndarray, g: np.ndarray, forces=None) -> np.ndarray:
+        """Bond tensions (n_bonds,) of displacement ``u`` (2N,) (force units); ``forces``
+        (from :meth:`forces`) saves recomputing them."""
+        f = self.forces(u, w, g) if forces is None else forces
+        return np.bincount(self.tri_bonds.ravel(), f.ravel(), self.n_bonds)
+
+    def patch_stress(self, u, w, g, length, area, weight=None, forces=None):
+        """Mean stress (n_bonds, 2, 2) around every bond: the area-weighted mean, over the
+        triangles at the bond's two end nodes, of the triangle stresses ``sum_k f_k l_k
+        n_k (x) n_k / A_T`` (the virial of the triangle's bond-force shares ``f``; it
+        equals the triangle's P1 stress ``C_T eps_T``).
+
+        Parameters
+        ----------
+        length : (M, 3) local bond lengths; area : (M,) triangle areas times the thickness.
+        weight : (M,) optional 0/1 weights of the triangles (e.g. only undamaged ones).
+        forces : (M, 3) optional, from :meth:`forces`.
+
+        Returns
+        -------
+        stress : (n_bonds, 2, 2)
+        covered : (n_bonds,) bool, False where no triangle of the patch has weight
+        """
+        f = (self.forces(u, w, g) if forces is None else forces) * length
+        if weight is not None:
+            f = f * weight[:, None]
+            area = area * weight
+        sig = np.matmul(f[:, None, :], self.nn)[:, 0, :]  # (M, 4): sum_k f_k n_k (x) n_k
+        tn = self.tri_nodes
+        nn = self.n_nodes
+        acc = np.stack([np.bincount(tn, np.repeat(sig[:, c], 3), nn) for c in range(4)], 1)
+        a = np.bincount(tn, np.repeat(area, 3), nn)
+        ends = self.ends
+        total = a[ends[:, 0]] + a[ends[:, 1]]
+        covered = total > 0
+        out = np.zeros((len(ends), 4))
+        out[covered] = (acc[ends[covered, 0]] + acc[ends[covered, 1]]) / total[covered, None]
+        return out.reshape(-1, 2, 2), covered
+
+    @cached_property
+    def nn(self) -> np.ndarray:
+        """``n_k (x) n_k`` of the three local edges, flattened, (M, 3, 4)."""
+        n = _local_directions(self.b)
+        return np.einsum("mki,mkj->mkij", n, n).reshape(len(n), 3, 4)
+
+    @cached_property
+    def tri_nodes(self) -> np.ndarray:
+        return (self.dofs[:, 0::2] // 2).ravel()
+
+    @cached_property
+    def n_nodes(self) -> int:
+        return int(self.dofs.max()) // 2 + 1
+
+    def stiffness(self, mesh, w: np.ndarray, g: np.ndarray) -> sp.bsr_matrix:
+        """The (2N, 2N) BSR stiffness for spring shares ``w`` and couplings ``g``."""
+        pat = assembly.pattern(mesh)
+        data = np.zeros((pat.nnzb, 4))
+        ke = np.einsum("mki,mkl,mlj->mij", self.b, self.q(w, g), self.b)
+        assembly.accumulate(pat, ke, data, slice(0, len(ke)))
+        return assembly.to_bsr(pat, data)
+
+
+def _local_directions(b: np.ndarray) -> np.ndarray:
+    """Unit directions (M, 3, 2) of the local edges from their elongation gradients."""
+    from .kinematics import A_OF
+
+    out = np.empty(b.shape[:2] + (2,))
+    bb = b.reshape(len(b), 3, 3, 2)
+    for k in range(3):
+        out[:, k] = bb[:, k, A_OF[k]]
+    return out
+
+
+def split(model: VoronoiModel) -> TriangleSplit:
+    """The per-triangle split of ``model``'s linear stiffness (its calibrated, stabilised
+    springs and couplings, times the thickness)."""
+    op = model.operator
+    mesh = model.mesh
+    geo = _geometry.of(mesh)
+    tb = mesh.topology.tri_bonds
+    _, _, n = edge_frames(geo.x_tri)
+    tri = mesh.triangles
+    dofs = np.stack([2 * tri, 2 * tri + 1], axis=-1).reshape(len(tri), 6)
+    return TriangleSplit(
+        tri_bonds=tb,
+        b=elongation_gradients(n),
+        w=geo.tri_weight * op.spring[tb],
+        g=np.array(op.coupling, dtype=float),
+        m=coupling_matrices(mesh, model.barycentric_images),
+        dofs=dofs,
+        ends=mesh.topology.bonds,
+    )

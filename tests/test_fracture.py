@@ -1,0 +1,417 @@
+"""Fracture by bond breaking (dv.fracture): what breaking means for the stiffness, the
+strength relation, the event loop's equilibrium and update path, the benchmarks in
+miniature, and bad input."""
+
+import math
+
+import numpy as np
+import pytest
+
+import dvstatic as dv
+from dvstatic.crack import EQUILIBRIUM_TOL
+from dvstatic.crack.strength import teeth_at, weibull_factors
+from dvstatic.lattice.damage import RESIDUAL, split
+from dvstatic.linalg import ConstrainedSystem
+from dvstatic.problem import constraints, load_vector
+
+E, NU, FT = 3e4, 0.2, 3.0
+
+
+def plate(h=0.1, seed=1, kind="jittered"):
+    return dv.mesh.rectangle(2.0, 1.0, h, kind=kind, seed=seed)
+
+
+def pulled(scale=1.0):
+    """Supports and loads of a 2 x 1 plate pulled by uniform tractions at both ends."""
+    sup = [dv.Fix(at=(0, 0), x=0, y=0), dv.Fix(at=(2, 0), y=0)]
+    return sup, [dv.Traction("right", (scale, 0.0)), dv.Traction("left", (-scale, 0.0))]
+
+
+def disc_problem(h, seed=0):
+    mesh = dv.mesh.disc(1.0, h, seed=seed)
+    x, be = mesh.points, mesh.boundary_edges
+    strip = np.all(np.abs(x[be, 0]) < 0.1, axis=1)
+    top = be[strip & np.all(x[be, 1] > 0, axis=1)]
+    bottom = be[strip & np.all(x[be, 1] < 0, axis=1)]
+    loads = [dv.Pressure(top, 1.0), dv.Pressure(bottom, 1.0)]
+    sup = [
+        dv.Fix(at=(0, 1), x=0),
+        dv.Fix(at=(0, -1), x=0),
+        dv.Fix(at=(1, 0), y=0),
+        dv.Fix(at=(-1, 0), y=0),
+    ]
+    p_strip = abs(load_vector(mesh, [loads[0]]).reshape(-1, 2).sum(axis=0)[1])
+    return mesh, sup, loads, p_strip
+
+
+# ------------------------------------------------------------------ what breaking means
+@pytest.mark.parametrize("cls", [dv.DV, dv.RV])
+def test_split_reproduces_the_stiffness_and_the_tensions(cls):
+    model = cls(plate(), E=E, nu=NU)
+    s = split(model)
+    w, g = s.factors(np.ones(model.mesh.n_bonds))
+    K = s.stiffness(model.mesh, w, g).toarray()
+    K0 = model.stiffness().toarray()
+    assert np.abs(K - K0).max() <= 1e-12 * np.abs(K0).max()
+    u = np.random.default_rng(0).normal(size=(model.mesh.n_points, 2))
+    t0 = model.linear_tension(u)
+    assert np.abs(s.tension(u.ravel(), w, g) - t0).max() <= 1e-12 * np.abs(t0).max()
+
+
+@pytest.mark.parametrize("cls", [dv.DV, dv.RV])
+def test_damage_keeps_the_stiffness_symmetric_positive_semidefinite(cls):
+    model = cls(plate(0.2, kind="random"), E=E, nu=0.3)
+    s = split(model)
+    rng = np.random.default_rng(3)
+    d = rng.choice([0.0, 0.25, 1.0], size=model.mesh.n_bonds, p=[0.2, 0.2, 0.6])
+    w, g = s.factors(d)
+    K = s.stiffness(model.mesh, w, g).toarray()
+    assert np.abs(K - K.T).max() <= 1e-12 * np.abs(K).max()
+    ev = np.linalg.eigvalsh(K)
+    assert ev[0] >= -1e-10 * ev[-1]
+    # a broken bond keeps only the residual fraction of its tension; a damaged bond's
+    # triangles lose their coupling in proportion (the weakest bond of the triangle)
+    u = rng.normal(size=2 * model.mesh.n_points)
+    t_broken = s.tension(u, w, g)[d == 0]
+    t_scale = np.abs(s.tension(u, *s.factors(np.ones_like(d)))).max()
+    assert np.abs(t_broken).max() <= 10 * RESIDUAL * t_scale
+    assert np.all(g[np.any(d[s.tri_bonds] == 0, axis=1)] == 0)
+
+
+def test_saw_tooth_releases_the_requested_energy():
+    k = np.array([1e4, 3e3])
+    peak = np.array([1e-4, 2e-4])
+    energy = np.array([5e-3, 2e-2])  # well above the elastic energy k peak^2 / 2
+    d, delta = teeth_at(k, peak, energy, n_teeth=12)
+    dnext = np.concatenate([d[:, 1:], np.zeros((2, 1))], axis=1)
+    released = 0.5 * k * np.sum((d - dnext) * delta**2, axis=1)
+    assert np.allclose(released, energy, rtol=1e-9)
+    assert np.allclose(delta[:, 0], peak) and np.allclose(d[:, 0], 1.0)
+    assert np.all(np.diff(delta, axis=1) > 0)  # each tooth opens further
+    assert np.all(np.diff(d, axis=1) < 0)  # with less stiffness
+    force = k[:, None] * d * delta
+    assert np.all(np.diff(force, axis=1) < 0)  # and carries less: softening
+
+
+def test_weibull_field_has_mean_one_and_the_weibull_scatter():
+    rng = np.random.default_rng(0)
+    pts = rng.uniform(0, 50, size=(20000, 2))
+    m = 12.0
+    f = weibull_factors(pts, dv.Weibull(m, 0.0, seed=2))
+    cov = math.sqrt(math.gamma(1 + 2 / m) / math.gamma(1 + 1 / m) ** 2 - 1)
+    assert abs(f.mean() - 1) < 0.01
+    assert abs(f.std() / cov - 1) < 0.05
+    # correlated: close points alike, distant ones not
+    g = weibull_factors(np.array([[0, 0], [0.05, 0], [40, 40]]), dv.Weibull(m, 1.0, seed=2))
+    assert abs(g[0] - g[1]) < 0.02
+    h = weibull_factors(pts[:4000], dv.Weibull(m, 1.0, seed=4))
+    near = np.linalg.norm(pts[:4000] - pts[0], axis=1) < 0.1
+    assert np.std(h[near]) < 0.3 * np.std(h)
+
+
+# ------------------------------------------------------------------ strength and events
+@pytest.mark.parametrize("cls", [dv.DV, dv.RV])
+def test_direct_tension_breaks_first_at_ft(cls):
+    sup, loads = pulled()
+    res = dv.fracture(cls(plate(0.05), E=E, nu=NU), sup, loads, ft=FT, max_events=1)
+    first = res.events[0]
+    assert first.load_factor == pytest.approx(FT, rel=0.02)  # sxx = load factor x 1
+    assert first.control_displacement > 0 and first.residual <= EQUILIBRIUM_TOL
+
+
+def test_the_stress_criterion_ignores_compression_along_the_face():
+    """Uniform sxx = s, syy = -3 s (the Brazilian centre): the stress criterion breaks at
+    s = ft; the bond tension, raised by the compression, breaks far earlier."""
+    mesh = plate(0.05)
+    sup = [dv.Fix(at=(0, 0), x=0, y=0), dv.Fix(at=(2, 0), y=0)]
+    loads = [
+        dv.Traction("right", (1.0, 0.0)),
+        dv.Traction("left", (-1.0, 0.0)),
+        dv.Traction("top", (0.0, -3.0)),
+        dv.Traction("bottom", (0.0, 3.0)),
+    ]
+    model = dv.DV(mesh, E=E, nu=NU)
+    stress = dv.fracture(model, sup, loads, ft=FT, max_events=1)
+    tension = dv.fracture(model, sup, loads, ft=FT, max_events=1, criterion="tension")
+    assert stress.events[0].load_factor == pytest.approx(FT, rel=0.03)
+    assert tension.events[0].load_factor < 0.6 * FT
+
+
+def test_updates_give_the_same_events_as_refactorising_every_event():
+    mesh, sup, loads, _ = disc_problem(0.045)  # about 1,800 nodes
+    assert 1500 < mesh.n_points < 2500
+    model = dv.DV(mesh, E=E, nu=NU)
+    kw = dict(
+        ft=FT, gf=5e-4, weibull=dv.Weibull(24, 0.2, seed=1), max_events=80, stop_load_ratio=0.0
+    )
+    fast = dv.fracture(model, sup, loads, **kw)
+    slow = dv.fracture(model, sup, loads, max_rank=0, **kw)
+    assert [e.bond for e in fast.events] == [e.bond for e in slow.events]
+    assert [e.tooth for e in fast.events] == [e.tooth for e in slow.events]
+    lf = np.array(
+        [[a.load_factor, b.load_factor] for a, b in zip(fast.events, slow.events, strict=True)]
+    )
+    assert np.allclose(lf[:, 0], lf[:, 1], rtol=1e-8)
+    assert fast.stats["factorisations"] < slow.stats["factorisations"] / 10
+
+
+def test_every_state_is_in_equilibrium():
+    """Each recorded residual is <= 1e-10, and a snapshot re-solved from scratch with the
+    damaged stiffness gives the same displacement."""
+    mesh, sup, loads, _ = disc_problem(0.08)
+    model = dv.DV(mesh, E=E, nu=NU)
+    res = dv.fracture(
+        model,
+        sup,
+        loads,
+        ft=FT,
+        gf=5e-4,
+        weibull=dv.Weibull(24, 0.2, 0),
+        max_events=120,
+        snapshot_every=40,
+        stop_load_ratio=0.0,
+    )
+    assert max(e.residual for e in res.events) <= EQUILIBRIUM_TOL
+    s = split(model)
+    dofs, values = constraints(mesh, sup)
+    f = load_vector(mesh, loads)
+    for snap in res.snapshots[1:]:
+        lam = res.events[snap.event].load_factor
+        K = s.stiffness(mesh, *s.factors(snap.stiffness))
+        system = ConstrainedSystem(K, dofs)
+        u = snap.u.ravel()
+        r = system.A @ u - system.rhs(lam * f, lam * values)
+        assert np.linalg.norm(r) <= 1e-9 * np.linalg.norm(lam * f)
+
+
+def test_brazilian_disc_splits_along_the_loaded_diameter():
+    mesh, sup, loads, p_strip = disc_problem(0.06, seed=1)
+    res = dv.fracture(
+        dv.DV(mesh, E=E, nu=NU),
+        sup,
+        loads,
+        ft=FT,
+        weibull=dv.Weibull(24, 0.2, seed=1),
+        stop_load_ratio=0.3,
+    )
+    mid = mesh.points[mesh.topology.bonds[res.broken]].mean(axis=1)
+    assert np.mean(np.abs(mid[:, 0]) < 0.2) > 0.75  # within 0.1 D of the diameter
+    splitting = 2 * res.peak.load_factor * p_strip / (np.pi * 2.0)
+    assert splitting == pytest.approx(FT, rel=0.15)
+    assert res.stop_reason == "load_drop"
+
+
+@pytest.mark.slow
+def test_notched_beam_dissipates_gf_times_the_ligament():
+    L, D, a, wn = 2000.0, 200.0, 100.0, 4.0
+    verts = [
+        (0, 0),
+        (L / 2 - wn / 2, 0),
+        (L / 2 - wn / 2, a),
+        (L / 2 + wn / 2, a),
+        (L / 2 + wn / 2, 0),
+        (L, 0),
+        (L, D),
+        (0, D),
+    ]
+    mesh = dv.mesh.polygon(verts, 14.0, seed=0)
+    sup = [dv.Fix(at=(0, 0), x=0, y=0), dv.Fix(at=(L, 0), y=0), dv.Fix(at=(L / 2, D), y=-1.0)]
+    model = dv.DV(mesh, E=30000.0, nu=0.2, thickness=50.0)
+    res = dv.fracture(model, sup, ft=3.33, gf=0.124, max_events=20_000, stop_load_ratio=0.02)
+    assert res.control == "displacement"
+    assert res.dissipated == pytest.approx(0.124 * (D - a) * 50.0, rel=0.15)
+    # the cohesive-crack reference (validation/_cohesive.py) peaks at 0.853 kN
+    assert 0.8e3 < res.peak.load < 1.1e3
+    d, p = res.curve()
+    assert np.all(np.isfinite(d)) and np.all(np.isfinite(p))
+
+
+# ------------------------------------------------------------------ stopping and bad input
+def test_a_load_that_separates_the_body_stops_cleanly():
+    sup, loads = pulled()
+    res = dv.fracture(dv.DV(plate(0.1), E=E, nu=NU), sup, loads, ft=FT, stop_load_ratio=0.0)
+    assert res.stop_reason == "separated"
+    assert "separated" in res.message or "apart" in res.message or "mechanism" in res.message
+    d, p = res.curve()
+    assert np.all(np.isfinite(d)) and np.all(np.isfinite(p)) and np.all(np.isfinite(res.u))
+
+
+def test_a_pulled_support_that_comes_loose_stops_cleanly():
+    """Displacement control through one corner node: once its bonds break, the node
+    that carries the prescribed displacement is no longer attached."""
+    mesh = plate(0.1)
+    sup = [dv.Fix("left", x=0), dv.Fix(at=(0, 0), y=0), dv.Fix(at=(2, 1), x=1e-3)]
+    res = dv.fracture(dv.DV(mesh, E=E, nu=NU), sup, ft=FT, stop_load_ratio=0.0)
+    assert res.control == "displacement"
+    assert res.stop_reason == "separated"
+    assert ("node" in res.message or "mechanism" in res.message) and np.all(np.isfinite(res.u))
+
+
+def test_interrupting_keeps_what_was_computed(monkeypatch):
+    import dvstatic.crack.sla as sla
+
+    real = sla._state
+    calls = {"n": 0}
+
+    def flaky(*args):
+        calls["n"] += 1
+        if calls["n"] == 4:
+            raise KeyboardInterrupt
+        return real(*args)
+
+    monkeypatch.setattr(sla, "_state", flaky)
+    sup, loads = pulled()
+    res = dv.fracture(dv.DV(plate(0.1), E=E, nu=NU), sup, loads, ft=FT)
+    assert res.stop_reason == "interrupted"
+    assert len(res.events) == 2 and np.all(np.isfinite(res.u))
+
+
+def test_per_region_strength():
+    strong = dv.domain.Polygon([(1.5, 0), (2, 0), (2, 1), (1.5, 1)], name="grip")
+    mesh = dv.mesh.rectangle(2.0, 1.0, 0.1, seed=1, regions=[strong])
+    sup, loads = pulled()
+    res = dv.fracture(
+        dv.DV(mesh, E=E, nu=NU),
+        sup,
+        loads,
+        ft={"default": FT, "grip": 5 * FT},
+        max_events=20,
+        stop_load_ratio=0.0,
+    )
+    mid = mesh.points[mesh.topology.bonds[[e.bond for e in res.events]]].mean(axis=1)
+    assert np.all(mid[:, 0] < 1.55)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "param"),
+    [
+        ({"ft": 0.0}, "ft"),
+        ({"ft": -1.0}, "ft"),
+        ({"ft": float("nan")}, "ft"),
+        ({"ft": {"grip": 1.0}}, "ft"),
+        ({"ft": {"default": 1.0, "nowhere": 2.0}}, "ft"),
+        ({"ft": FT, "gf": 0.0}, "gf"),
+        ({"ft": FT, "gf": 1e-12}, "gf"),
+        ({"ft": FT, "max_events": 0}, "max_events"),
+        ({"ft": FT, "criterion": "energy"}, "criterion"),
+        ({"ft": FT, "teeth": 1}, "teeth"),
+        ({"ft": FT, "stop_load_ratio": 1.5}, "stop_load_ratio"),
+        ({"ft": FT, "fragment": -0.1}, "fragment"),
+        ({"ft": FT, "fragment": float("nan")}, "fragment"),
+        ({"ft": FT, "snapshot_every": 0}, "snapshot_every"),
+        ({"ft": FT, "snapshot_every": 2.5}, "snapshot_every"),
+        ({"ft": FT, "max_rank": 10**6}, "max_rank"),
+        ({"ft": FT, "gf": {"grip": 1.0}}, "gf"),
+    ],
+)
+def test_bad_input_is_refused_with_its_name(kwargs, param):
+    sup, loads = pulled()
+    with pytest.raises(dv.InputError) as err:
+        dv.fracture(dv.DV(plate(0.2), E=E, nu=NU), sup, loads, **kwargs)
+    assert err.value.param == param
+
+
+def test_gf_too_small_names_the_smallest_admissible_value():
+    sup, loads = pulled()
+    with pytest.raises(dv.InputError, match=r"use gf > [0-9.e-]+ or a finer mesh"):
+        dv.fracture(dv.DV(plate(0.2), E=E, nu=NU), sup, loads, ft=FT, gf=1e-9)
+
+
+def test_nothing_to_load_and_no_supports_are_refused():
+    model = dv.DV(plate(0.2), E=E, nu=NU)
+    sup, _ = pulled()
+    with pytest.raises(dv.InputError, match="nothing loads the body"):
+        dv.fracture(model, sup, [], ft=FT)
+    with pytest.raises(dv.InputError, match="rigid-body"):
+        dv.fracture(model, [], pulled()[1], ft=FT)
+    with pytest.raises(TypeError, match="Weibull"):
+        dv.fracture(model, sup, pulled()[1], ft=FT, weibull=12)
+    with pytest.raises(TypeError, match="DV or RV"):
+        dv.fracture("model", sup, pulled()[1], ft=FT)
+
+
+def test_result_summary_is_json_ready():
+    import json
+
+    sup, loads = pulled()
+    res = dv.fracture(dv.DV(plate(0.1), E=E, nu=NU), sup, loads, ft=FT, max_events=5)
+    text = json.dumps(res.to_dict())
+    assert '"events"' in text and len(res.to_dict()["events"]) == len(res.events)
+    assert res.node_damage().shape == (res.model.mesh.n_points,)
+
+
+def test_tension_criterion_breaks_at_ft_under_oblique_stress():
+    """The largest tension a uniaxial stress can give a bond uses H_xy = (xy tension) / 2:
+    a plate pulled at 45 degrees breaks close to ft, not far above it."""
+    mesh = dv.mesh.disc(1.0, 0.06, seed=2, kind="random")
+    c, s_ = np.cos(np.pi / 4), np.sin(np.pi / 4)
+    sig = np.array([[c * c, c * s_], [c * s_, s_ * s_]])
+
+    def traction(x):
+        n = x / np.hypot(x[:, 0], x[:, 1])[:, None]
+        return n @ sig.T
+
+    sup = [dv.Fix(at=(1, 0), y=0), dv.Fix(at=(-1, 0), x=0, y=0)]
+    for criterion in ("tension", "stress"):
+        res = dv.fracture(
+            dv.DV(mesh, E=E, nu=NU),
+            sup,
+            dv.Traction("boundary", traction),
+            ft=FT,
+            max_events=1,
+            criterion=criterion,
+        )
+        assert 0.97 * FT < res.events[0].load_factor < 1.1 * FT
+
+
+def test_strengths_of_several_materials_come_from_each_material():
+    """Two layers stretched along them (rollers at both ends: uniform strain, stress E eps
+    in each layer). Uniform tractions would bend a two-material body, so each material's
+    bonds are calibrated on that material alone: the first break comes where it does in
+    one material (the grips' corner), not at a third of ft."""
+    top = dv.domain.Polygon([(0, 0.5), (2, 0.5), (2, 1), (0, 1)], name="top")
+    mesh = dv.mesh.rectangle(2.0, 1.0, 0.1, seed=1, regions=[top])
+    sup = [dv.Fix("left", x=0), dv.Fix(at=(0, 0), y=0), dv.Fix("right", x=1e-4)]
+    ratios = []
+    for e_top in (E, 10 * E):
+        model = dv.DV(mesh, E=E, nu=NU, materials={"top": (e_top, NU)})
+        res = dv.fracture(model, sup, ft=FT, max_events=1)
+        y = mesh.points[mesh.topology.bonds[res.events[0].bond]].mean(axis=0)[1]
+        strain = res.events[0].load_factor * 1e-4 / 2.0
+        ratios.append((e_top if y > 0.5 else E) * strain / FT)
+    assert ratios[1] == pytest.approx(ratios[0], abs=0.05)
+    assert 0.85 < ratios[1] <= 1.02
+
+
+def test_a_self_balanced_load_has_a_finite_reference():
+    mesh, sup, loads, p_strip = disc_problem(0.1)
+    one = dv.Pressure(np.concatenate([loads[0].where, loads[1].where]), 1.0)
+    res = dv.fracture(dv.DV(mesh, E=E, nu=NU), sup, one, ft=FT, max_events=3)
+    e = res.events[0]
+    assert e.load == pytest.approx(e.load_factor * p_strip, rel=0.01)
+    assert 0 < e.control_displacement < 1e-2
+
+
+def test_loads_with_a_prescribed_displacement_do_not_stop_at_once():
+    mesh = plate(0.1)
+    sup = [dv.Fix(at=(0, 0), x=0, y=0), dv.Fix(at=(2, 0), y=-1e-6)]
+    res = dv.fracture(
+        dv.DV(mesh, E=E, nu=NU), sup, dv.BodyForce((0.0, -100.0)), ft=FT, max_events=5
+    )
+    assert len(res.events) == 5 or res.stop_reason != "load_drop"
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "param"),
+    [
+        ({"m": 0.5}, "weibull.m"),
+        ({"m": True}, "weibull.m"),
+        ({"m": 12, "length": np.inf}, "weibull.length"),
+        ({"m": 12, "seed": -1}, "weibull.seed"),
+    ],
+)
+def test_bad_weibull_fields_are_refused(kwargs, param):
+    with pytest.raises(dv.InputError) as err:
+        dv.Weibull(**kwargs)
+    assert err.value.param == param
+    assert dv.Weibull(np.int64(12), np.float32(0.5), np.int64(3)).m == 12.0
