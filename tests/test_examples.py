@@ -261,8 +261,17 @@ def test_notched_beam_fracture_scene(tmp_path):
     assert np.all(np.isfinite(last.point_data["damage"]))
 
 
-def test_fracture_scene_errors_name_the_key(tmp_path):
-    scene = (EXAMPLES / "notched_beam.toml").read_text().replace("ft = 3.33", "ft = -3.33")
+@pytest.mark.parametrize(
+    ("old", "new", "key"),
+    [
+        ("\nft = 3.33", "\nft = -3.33", "fracture.ft"),
+        ("gf = 0.124", "gf = 0.124\nweibull_length = 5.0", "fracture.weibull_length"),
+        ("gf = 0.124", "gf = 1e-9", "fracture.gf"),
+        ("gf = 0.124", "gf = 0.124\nweibull_m = 0.5", "fracture.weibull_m"),
+    ],
+)
+def test_fracture_scene_errors_name_the_key(tmp_path, old, new, key):
+    scene = (EXAMPLES / "notched_beam.toml").read_text().replace(old, new, 1)
     path = tmp_path / "bad.toml"
     path.write_text(scene)
     proc = subprocess.run(
@@ -271,5 +280,5 @@ def test_fracture_scene_errors_name_the_key(tmp_path):
         text=True,
         check=False,
     )
-    assert proc.returncode == 2
-    assert "fracture.ft" in proc.stderr and "Traceback" not in proc.stderr
+    assert proc.returncode == 2, proc.stderr
+    assert key in proc.stderr and "Traceback" not in proc.stderr

@@ -220,6 +220,9 @@ class Scene:
                 gf = {"default": gf, **{r["name"]: r["gf"] for r in with_gf}}
         if fr["snapshots"] < 1:
             raise SceneError(self.path, "fracture.snapshots", "must be >= 1")
+        if fr["weibull_m"] is None and (fr["weibull_length"] or fr["seed"]):
+            key = "fracture.weibull_length" if fr["weibull_length"] else "fracture.seed"
+            raise SceneError(self.path, key, "applies to a random field: give weibull_m too")
         try:
             weibull = None
             if fr["weibull_m"] is not None:
