@@ -261,9 +261,12 @@ def test_interrupting_keeps_what_was_computed(monkeypatch):
 
     monkeypatch.setattr(sla, "_state", flaky)
     sup, loads = pulled()
-    res = dv.fracture(dv.DV(plate(0.1), E=E, nu=NU), sup, loads, ft=FT)
+    res = dv.fracture(dv.DV(plate(0.05), E=E, nu=NU), sup, loads, ft=FT, gf=2e-3)
     assert res.stop_reason == "interrupted"
     assert len(res.events) == 2 and np.all(np.isfinite(res.u))
+    # the interrupted third event was undone: only the recorded events changed bonds
+    changed = np.flatnonzero(res.stiffness < 1)
+    assert set(changed) == {e.bond for e in res.events}
 
 
 def test_per_region_strength():

@@ -71,9 +71,9 @@ class Measure:
     ``H_nn sigma_nn``, the normal stress across the face times the bond's tension per
     unit normal stress ``H_nn``. ``sigma`` is the mean stress of the triangles at the
     bond's two end nodes, corrected by the inverse of that patch's response to uniform
-    stress (so that it is exact under any uniform stress). Next to damage (a damaged
-    triangle at an end node), the bond's own tension without the part that stress
-    along its face causes, ``T_e - (H_e : sigma - H_nn sigma_nn)``: the tension resolves
+    stress (so that it is exact under any uniform stress). Next to damage (in a damaged
+    triangle), the bond's own tension without the part that stress along its face
+    causes, ``T_e - (H_e : sigma - H_nn sigma_nn)``: the tension resolves
     the stress concentration at a crack tip that a patch mean would smear, and damaged
     triangles are left out of ``sigma`` so that the crack does not shield the bonds
     ahead of it. Under uniform stress both are ``H_nn sigma_nn``. Slivers whose tension
@@ -87,7 +87,6 @@ class Measure:
         self.area = geo.tri_area * model.t
         self.n = geo.direction
         self.bonds = model.mesh.topology.bonds
-        self.n_nodes = model.mesh.n_points
         self.h = None  # (n_bonds, 3): tension per unit xx, yy and xy stress
 
     def patch(self, x, w, g, intact=None):
@@ -129,11 +128,10 @@ class Measure:
         return np.where(covered & ~self.use_tension, m, t)
 
     def _near_damage(self, intact: np.ndarray) -> np.ndarray:
-        """Bonds with a damaged triangle at one of their end nodes, (n_bonds,) bool."""
-        tri_nodes = self.sp.dofs[:, 0::2] // 2
-        hit = np.zeros(self.n_nodes, dtype=bool)
-        hit[tri_nodes[intact < 1].ravel()] = True
-        return hit[self.bonds[:, 0]] | hit[self.bonds[:, 1]]
+        """Bonds of a damaged triangle (the damaged bond's neighbours), (n_bonds,) bool."""
+        hit = np.zeros(len(self.bonds), dtype=bool)
+        hit[self.sp.tri_bonds[intact < 1].ravel()] = True
+        return hit
 
     def elongation(self, x) -> np.ndarray:
         u = x.reshape(-1, 2)
