@@ -21,9 +21,8 @@ __all__ = ["CRITERIA", "Measure", "strengths", "per_bond", "positive"]
 CRITERIA = ("stress", "tension")
 
 
-def positive(value, name: str, allow_none: bool = False) -> None:
-    if value is None and allow_none:
-        return
+def positive(value, name: str) -> None:
+    """Refuse ``value`` unless it is a finite number > 0 (numpy scalars accepted)."""
     ok = isinstance(value, (int, float, np.floating, np.integer)) and not isinstance(value, bool)
     if not ok or not math.isfinite(float(value)) or float(value) <= 0:
         raise InputError(f"{name} must be a finite number > 0, got {value!r}", name)
@@ -88,9 +87,6 @@ class Measure:
         self.n = geo.direction
         self.bonds = model.mesh.topology.bonds
         self.h = None  # (n_bonds, 3): tension per unit xx, yy and xy stress
-
-    def patch(self, x, w, g, intact=None):
-        return self.sp.patch_stress(x, w, g, self.length, self.area, intact)
 
     def set_response(self, h: np.ndarray, patches) -> None:
         """Tensions (n_bonds, 3) and patch stresses (3 x (stress, covered)) under the unit

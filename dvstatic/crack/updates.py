@@ -64,10 +64,10 @@ class UpdatedSolver:
         """Factorise the stiffness of ``w, g`` and make it the base."""
         t0 = time.perf_counter()
         self.w0, self.g0 = w.copy(), g.copy()
-        self.K0 = self.split.stiffness(self.mesh, w, g).tocsr()
-        self.system = ConstrainedSystem(self.K0.tobsr(blocksize=(2, 2)), self.dofs)
+        self.K0 = self.split.stiffness(self.mesh, w, g)  # BSR, as ConstrainedSystem takes it
+        self.system = ConstrainedSystem(self.K0, self.dofs)
         self.engine = DirectSolver(self.system.A, order=self._order)
-        self.slots: dict[int, int] = {}
+        self.touched: set[int] = set()
         self.tris = np.zeros(0, dtype=np.int64)
         # the buffers grow (doubling, up to max_rank + 12 columns) as triangles are touched
         if self._z.shape[1] == 0:
@@ -93,11 +93,12 @@ class UpdatedSolver:
 
     def touch(self, tris: np.ndarray) -> None:
         """Make triangles ``tris`` part of the update (new columns of Z and W)."""
-        new = np.array([t for t in np.unique(tris) if int(t) not in self.slots], dtype=np.int64)
+        import scipy.sparse as sp
+
+        new = np.array([t for t in np.unique(tris) if int(t) not in self.touched], dtype=np.int64)
         if new.size == 0:
             return
-        for t in new:
-            self.slots[int(t)] = len(self.slots)
+        self.touched.update(int(t) for t in new)
         r_old = self.rank
         self.tris = np.concatenate([self.tris, new])
         r = self.rank
@@ -108,8 +109,9 @@ class UpdatedSolver:
             w = np.empty((cap, cap))
             w[:r_old, :r_old] = self._w[:r_old, :r_old]
             self._z, self._w = z, w
-        zn = self.engine.apply(self._columns(new).toarray())
-        u_all = self._columns(self.tris)
+        u_new = self._columns(new)
+        zn = self.engine.apply(u_new.toarray())
+        u_all = u_new if self._u_cols is None else sp.hstack([self._u_cols, u_new], format="csc")
         wn = u_all.T @ zn  # (rank, 3 len(new)): W is symmetric as A0 is
         self._z[:, r_old:r] = zn
         self._w[:r, r_old:r] = wn

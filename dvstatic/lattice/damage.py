@@ -69,7 +69,7 @@ class TriangleSplit:
     dofs: np.ndarray
     ends: np.ndarray
 
-    @property
+    @cached_property
     def n_bonds(self) -> int:
         return int(self.tri_bonds.max()) + 1
 
