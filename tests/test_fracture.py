@@ -93,6 +93,25 @@ def test_saw_tooth_releases_the_requested_energy():
     assert np.all(np.diff(force, axis=1) < 0)  # and carries less: softening
 
 
+@pytest.mark.parametrize("n", [2, 5, 30])
+def test_saw_tooth_steps_are_gradual_in_opening_and_force(n):
+    """No tooth opens a bond by more than R^(2/n) nor drops its force by more than 2/n
+    of its strength (R = delta_u / delta_p), over brittle to very ductile bonds; the
+    teeth peak on the linear softening line."""
+    k, peak = np.full(4, 2e4), np.full(4, 1e-4)
+    energy = 0.5 * k * peak**2 * np.array([1.5, 20.0, 400.0, 5e4])
+    d, delta = teeth_at(k, peak, energy, n_teeth=n)
+    force = k[:, None] * d * delta / (k * peak)[:, None]
+    # the end of the softening line through the teeth: force = (R - x) / (R - 1)
+    x = delta / peak[:, None]
+    ratio = (x[:, 1] - force[:, 1]) / (1 - force[:, 1])
+    assert np.allclose(force, (ratio[:, None] - x) / (ratio[:, None] - 1), rtol=1e-9)
+    assert np.all(x[:, 1:] / x[:, :-1] <= ratio[:, None] ** (2 / n) * (1 + 1e-9))
+    assert np.all(-np.diff(force, axis=1) <= 2 / n + 1e-9)
+    if n == 30:  # up to R = 400 a bond keeps most of its stiffness after one tooth
+        assert np.all(d[:3, 1] > 0.6)  # (equal force steps: 0.07 at R = 400)
+
+
 def test_weibull_field_has_mean_one_and_the_weibull_scatter():
     rng = np.random.default_rng(0)
     pts = rng.uniform(0, 50, size=(20000, 2))
@@ -418,3 +437,17 @@ def test_bad_weibull_fields_are_refused(kwargs, param):
         dv.Weibull(**kwargs)
     assert err.value.param == param
     assert dv.Weibull(np.int64(12), np.float32(0.5), np.int64(3)).m == 12.0
+
+
+def test_meshes_with_lattice_rows_are_flagged_once(monkeypatch, caplog):
+    """Cracks follow the rows of a jittered mesh: say so once per kind, not for CVT."""
+    import dvstatic.crack.sla as sla
+
+    monkeypatch.setattr(sla, "_WARNED", set())
+    sup, loads = pulled()
+    with caplog.at_level("WARNING", logger="dvstatic.crack.sla"):
+        dv.fracture(dv.DV(plate(0.2, kind="cvt"), E=E, nu=NU), sup, loads, ft=FT, max_events=1)
+        assert not caplog.records
+        for _ in range(2):
+            dv.fracture(dv.DV(plate(0.2), E=E, nu=NU), sup, loads, ft=FT, max_events=1)
+    assert len(caplog.records) == 1 and "kind='cvt'" in caplog.records[0].getMessage()

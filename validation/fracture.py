@@ -3,7 +3,7 @@ Brazilian disc over 5 seeds, Petersson's notched beam on three meshes against a
 cohesive-crack reference, and events per second with factorisation updates against
 refactorising at every event. Prints tables, writes fracture.json and fracture.png.
 
-Brazilian disc: D = 2, t = 1, E = 3e4, nu = 0.2, ft = 3, loading strips 0.1 D wide,
+Brazilian disc (CVT meshes): D = 2, t = 1, E = 3e4, nu = 0.2, ft = 3, loading strips 0.1 D wide,
 Weibull strengths (m = 24, Bazant's value for concrete; correlation length 0.1 D),
 saw-tooth softening with gf = 5e-4 (characteristic length E gf / ft^2 = 0.8 D); also
 brittle bonds. Reported: 2 P / (pi D t) at the peak over ft, and the share of broken
@@ -13,7 +13,8 @@ Notched beam (Petersson 1981, as in Rots 1988): span 2000 mm, depth 200 mm, thic
 50 mm, notch 100 mm, E = 30 GPa, nu = 0.2, ft = 3.33 MPa, Gf = 0.124 N/mm, midspan
 deflection prescribed. Reference: the fictitious-crack (cohesive) model with linear
 softening on the ligament, computed here on a P2 FE half beam (validation/_cohesive.py;
-peak 0.853 kN, Petersson's tests peaked at about 0.8 kN).
+peak 0.853 kN, Petersson's tests peaked at about 0.8 kN). Meshes: the default kind
+(jittered lattice rows), h = 14 / 10 / 7 / 5 mm, and CVT meshes, h = 10 / 7 / 5 mm.
 """
 
 from __future__ import annotations
@@ -41,7 +42,7 @@ def direct_tension(model_cls, h: float = 0.05) -> float:
 
 def brazilian(h: float, seed: int, gf=5e-4, weibull_m: float = 24.0, model=dv.DV, **kw):
     """One Brazilian test; returns the result and the load of one strip per load factor."""
-    mesh = dv.mesh.disc(1.0, h, seed=seed)
+    mesh = dv.mesh.disc(1.0, h, seed=seed, kind="cvt")
     x, be = mesh.points, mesh.boundary_edges
     strip = np.all(np.abs(x[be, 0]) < 0.1, axis=1)
     top = be[strip & np.all(x[be, 1] > 0, axis=1)]
@@ -90,7 +91,7 @@ def brazilian_table(h: float, seeds: int, gf) -> dict:
     return {"h": h, "gf": gf, "rows": rows}
 
 
-def petersson_run(h: float, model=dv.DV, **kw):
+def petersson_run(h: float, model=dv.DV, kind: str = "jittered", **kw):
     b = BEAM
     L, D, a, wn = b["L"], b["D"], b["a"], 4.0
     verts = [
@@ -103,22 +104,23 @@ def petersson_run(h: float, model=dv.DV, **kw):
         (L, D),
         (0, D),
     ]
-    mesh = dv.mesh.polygon(verts, h, seed=0)
+    mesh = dv.mesh.polygon(verts, h, seed=0, kind=kind)
     sup = [dv.Fix(at=(0, 0), x=0, y=0), dv.Fix(at=(L, 0), y=0), dv.Fix(at=(L / 2, D), y=-1.0)]
     lattice = model(mesh, E=b["E"], nu=b["nu"], thickness=b["t"])
     return dv.fracture(lattice, sup, ft=b["ft"], gf=b["gf"], **kw)
 
 
-def petersson(h: float, model=dv.DV) -> dict:
+def petersson(h: float, model=dv.DV, kind: str = "jittered") -> dict:
     b = BEAM
     D, a = b["D"], b["a"]
     t0 = time.perf_counter()
-    res = petersson_run(h, model, max_events=50_000, stop_load_ratio=0.02)
+    res = petersson_run(h, model, kind, max_events=50_000, stop_load_ratio=0.02)
     mesh = res.model.mesh
     d, p = res.curve()
     target = b["gf"] * (D - a) * b["t"]
     out = {
         "model": model.__name__,
+        "kind": kind,
         "h": h,
         "nodes": mesh.n_points,
         "events": len(res.events),
@@ -132,7 +134,8 @@ def petersson(h: float, model=dv.DV) -> dict:
         "curve": {"deflection": d.tolist(), "load": p.tolist()},
     }
     print(
-        f"  {model.__name__} h = {h:g} mm: {out['nodes']} nodes, {out['events']} events, peak "
+        f"  {model.__name__} {kind} h = {h:g} mm: {out['nodes']} nodes, {out['events']} "
+        "events, peak "
         f"{out['peak_kN']:.3f} kN at {out['peak_deflection']:.3f} mm, dissipated "
         f"{out['dissipated_Nmm']:.0f} N mm = {out['dissipated_Nmm'] / target:.2f} Gf x "
         f"ligament x t, max residual {out['max_residual']:.1e}"
@@ -170,32 +173,35 @@ def speed(h: float, events: int, ref_events: int) -> dict:
 def plot(data: dict, path) -> None:
     from dvstatic import plot as dvplot
 
-    fig, axes = dvplot.figure(1, 1, (7.5, 4.8))
-    ax = axes[0][0]
+    fig, axes = dvplot.figure(2, 1, (13.0, 4.8))
     ref = data["cohesive"]
-    ax.plot(
-        ref["deflection"],
-        np.array(ref["load"]) / 1e3,
-        "k-",
-        lw=2.5,
-        alpha=0.5,
-        label=f"cohesive crack, P2 FE (peak {ref['peak_N'] / 1e3:.3f} kN)",
-    )
-    for run in data["petersson"]:
-        c = run["curve"]
+    for ax, kind in zip(axes[0], ("jittered", "cvt"), strict=True):
         ax.plot(
-            c["deflection"],
-            np.array(c["load"]) / 1e3,
-            lw=0.8,
-            label=f"{run['model']} h = {run['h']:g} mm, {run['nodes']} nodes "
-            f"(peak {run['peak_kN']:.3f} kN)",
+            ref["deflection"],
+            np.array(ref["load"]) / 1e3,
+            "k-",
+            lw=2.5,
+            alpha=0.5,
+            label=f"cohesive crack, P2 FE (peak {ref['peak_N'] / 1e3:.3f} kN)",
         )
-    ax.set_xlim(0, 1.5)
-    ax.set_ylim(0, None)
-    ax.set_xlabel("midspan deflection (mm)")
-    ax.set_ylabel("load (kN)")
-    ax.set_title("Petersson's notched beam: lattice SLA (saw-tooth, 30 teeth) vs cohesive crack")
-    ax.legend(fontsize=8)
+        for run in data["petersson"]:
+            if run["kind"] != kind:
+                continue
+            c = run["curve"]
+            ax.plot(
+                c["deflection"],
+                np.array(c["load"]) / 1e3,
+                lw=0.8,
+                label=f"{run['model']} h = {run['h']:g} mm, {run['nodes']} nodes "
+                f"(peak {run['peak_kN']:.3f} kN, "
+                f"{run['dissipated_Nmm'] / run['gf_ligament_Nmm']:.2f} Gf)",
+            )
+        ax.set_xlim(0, 1.5)
+        ax.set_ylim(0, None)
+        ax.set_xlabel("midspan deflection (mm)")
+        ax.set_ylabel("load (kN)")
+        ax.set_title(f"Petersson's notched beam, {kind} meshes: lattice SLA vs cohesive crack")
+        ax.legend(fontsize=7)
     print("wrote", dvplot.save(fig, path))
 
 
@@ -219,10 +225,11 @@ def main(argv=None) -> int:
         f"peak {data['cohesive']['peak_N'] / 1e3:.3f} kN at "
         f"{data['cohesive']['peak_deflection']:.3f} mm"
     )
-    sizes = (20.0,) if args.quick else (14.0, 10.0, 7.0, 5.0)
-    data["petersson"] = [petersson(h) for h in sizes]
+    runs = [(20.0, dv.DV, "jittered")]
     if not args.quick:
-        data["petersson"].append(petersson(10.0, dv.RV))
+        runs = [(h, dv.DV, "jittered") for h in (14.0, 10.0, 7.0, 5.0)]
+        runs += [(h, dv.DV, "cvt") for h in (10.0, 7.0, 5.0)] + [(10.0, dv.RV, "jittered")]
+    data["petersson"] = [petersson(*run) for run in runs]
     print("events per second (notched beam, the first events)")
     runs = ((20.0, 60, 10),) if args.quick else ((7.0, 300, 20), (2.2, 100, 3))
     data["speed"] = [speed(*s) for s in runs]

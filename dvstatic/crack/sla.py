@@ -196,6 +196,7 @@ def fracture(
         teeth=teeth,
     )
     _check_options(model, weibull, criterion, opts)
+    _warn_rows(model.mesh)
     timings: dict[str, float] = {}
     t_start = time.perf_counter()
     dofs, values, f, control, ref = _reference(model, supports, loads)
@@ -206,6 +207,22 @@ def fracture(
     return _run(
         model, sp_, measure, s0, energy, (dofs, values, f, control, ref), timings, t_start, opts
     )
+
+
+#: mesh kinds already warned about (once per process, as :mod:`warnings` would)
+_WARNED: set[str] = set()
+
+
+def _warn_rows(mesh) -> None:
+    """Say once that a mesh of lattice rows steers cracks along its rows."""
+    sampling = mesh.sampling
+    if sampling is not None and sampling.kind in {"lattice", "jittered"} - _WARNED:
+        _WARNED.add(sampling.kind)
+        log.warning(
+            "mesh kind %r has lattice rows: cracks tend to run along them (0, 60 or 120 "
+            "degrees); for fracture, kind='cvt' gives paths free of that bias",
+            sampling.kind,
+        )
 
 
 def _energies(model, gf, s_tension) -> np.ndarray:
