@@ -93,6 +93,14 @@ def test_saw_tooth_releases_the_requested_energy():
     assert np.all(np.diff(force, axis=1) < 0)  # and carries less: softening
 
 
+def test_saw_tooth_of_a_nearly_brittle_bond_and_a_refused_energy():
+    d, delta = teeth_at(1.0, 1.0, 0.5 * (1 + 2e-9), n_teeth=30)
+    assert np.all(np.diff(d[0]) < 0) and np.all(np.diff(delta[0]) > 0)
+    assert np.all(np.isfinite(d)) and np.all(np.isfinite(delta))
+    with pytest.raises(ValueError, match="elastic energy"):
+        teeth_at(1.0, 1.0, 0.5, n_teeth=30)  # no more than it stores at the crack
+
+
 @pytest.mark.parametrize("n", [2, 5, 30])
 def test_saw_tooth_steps_are_gradual_in_opening_and_force(n):
     """No tooth opens a bond by more than R^(2/n) nor drops its force by more than 2/n
@@ -445,9 +453,17 @@ def test_meshes_with_lattice_rows_are_flagged_once(monkeypatch, caplog):
 
     monkeypatch.setattr(sla, "_WARNED", set())
     sup, loads = pulled()
+
+    def flagged():
+        return [r for r in caplog.records if r.name == "dvstatic.crack.sla"]
+
     with caplog.at_level("WARNING", logger="dvstatic.crack.sla"):
         dv.fracture(dv.DV(plate(0.2, kind="cvt"), E=E, nu=NU), sup, loads, ft=FT, max_events=1)
-        assert not caplog.records
+        assert not flagged()
+        jittered = dv.DV(plate(0.2), E=E, nu=NU)
+        with pytest.raises(dv.InputError):  # refused input does not use up the warning
+            dv.fracture(jittered, sup, loads, ft=FT, gf=1e-12, max_events=1)
+        assert not flagged()
         for _ in range(2):
-            dv.fracture(dv.DV(plate(0.2), E=E, nu=NU), sup, loads, ft=FT, max_events=1)
-    assert len(caplog.records) == 1 and "kind='cvt'" in caplog.records[0].getMessage()
+            dv.fracture(jittered, sup, loads, ft=FT, max_events=1)
+    assert len(flagged()) == 1 and "kind='cvt'" in flagged()[0].getMessage()

@@ -1,13 +1,14 @@
 """Fracture by bond breaking (dv.fracture): first break under uniform tension, the
-Brazilian disc over 5 seeds, Petersson's notched beam on three meshes against a
-cohesive-crack reference, and events per second with factorisation updates against
-refactorising at every event. Prints tables, writes fracture.json and fracture.png.
+Brazilian disc over 5 seeds, Petersson's notched beam on seven DV meshes of two kinds
+(and one RV) against a cohesive-crack reference, and events per second with
+factorisation updates against refactorising at every event. Prints tables, writes
+fracture.json and fracture.png.
 
-Brazilian disc (CVT meshes): D = 2, t = 1, E = 3e4, nu = 0.2, ft = 3, loading strips 0.1 D wide,
-Weibull strengths (m = 24, Bazant's value for concrete; correlation length 0.1 D),
-saw-tooth softening with gf = 5e-4 (characteristic length E gf / ft^2 = 0.8 D); also
-brittle bonds. Reported: 2 P / (pi D t) at the peak over ft, and the share of broken
-bonds within 0.1 D of the loaded diameter.
+Brazilian disc (CVT meshes): D = 2, t = 1, E = 3e4, nu = 0.2, ft = 3, loading strips
+0.1 D wide, Weibull strengths (m = 24, Bazant's value for concrete; correlation length
+0.1 D), saw-tooth softening with gf = 5e-4 (characteristic length E gf / ft^2 = 0.8 D);
+also brittle bonds. Reported: 2 P / (pi D t) at the peak over ft, and the share of
+broken bonds within 0.1 D of the loaded diameter.
 
 Notched beam (Petersson 1981, as in Rots 1988): span 2000 mm, depth 200 mm, thickness
 50 mm, notch 100 mm, E = 30 GPa, nu = 0.2, ft = 3.33 MPa, Gf = 0.124 N/mm, midspan

@@ -21,13 +21,14 @@ from ..errors import InputError
 from ..lattice import VoronoiModel
 from ..lattice.damage import split as _split
 from ..linalg import check_restrained
+from ..mesh import Mesh
 from ..problem import constraints, load_vector
 from ..problem.loads import nodal_forces
 from ..problem.select import as_list
 from .criterion import CRITERIA, Measure, per_bond, strengths
 from .pieces import Pieces, bond_triangles
 from .result import Event, FractureResult, Snapshot
-from .strength import Weibull, smallest_gf, teeth_at
+from .strength import MIN_EXCESS, Weibull, smallest_gf, teeth_at
 from .updates import UpdatedSolver
 
 log = logging.getLogger(__name__)
@@ -196,7 +197,6 @@ def fracture(
         teeth=teeth,
     )
     _check_options(model, weibull, criterion, opts)
-    _warn_rows(model.mesh)
     timings: dict[str, float] = {}
     t_start = time.perf_counter()
     dofs, values, f, control, ref = _reference(model, supports, loads)
@@ -204,6 +204,7 @@ def fracture(
     measure = Measure(model, sp_, criterion)
     s0, s_tension = strengths(model, measure, ft, weibull, timings)
     energy = None if gf is None else _energies(model, gf, s_tension)
+    _warn_rows(model.mesh)
     return _run(
         model, sp_, measure, s0, energy, (dofs, values, f, control, ref), timings, t_start, opts
     )
@@ -213,7 +214,7 @@ def fracture(
 _WARNED: set[str] = set()
 
 
-def _warn_rows(mesh) -> None:
+def _warn_rows(mesh: Mesh) -> None:
     """Say once that a mesh of lattice rows steers cracks along its rows."""
     sampling = mesh.sampling
     if sampling is not None and sampling.kind in {"lattice", "jittered"} - _WARNED:
@@ -284,7 +285,7 @@ class _Bonds:
         """Soften or remove bond ``e`` cracking at elongation ``peak``; True if removed."""
         if self.d[e] >= 1.0:
             en = None if self.energy is None else self.energy[e]
-            if en is None or peak <= 0 or en <= 0.5 * self.spring[e] * peak**2:
+            if en is None or peak <= 0 or en <= 0.5 * self.spring[e] * peak**2 * (1 + MIN_EXCESS):
                 self.d[e] = 0.0
                 return True
             d, delta = teeth_at(self.spring[e], peak, en, self.teeth)

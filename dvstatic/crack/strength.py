@@ -64,8 +64,12 @@ __all__ = [
     "smallest_gf",
 ]
 
-#: share of the logarithmic part in the spacing of the saw-tooth steps (:func:`teeth_at`)
-SPACING = 0.5
+#: share of the logarithmic part in the spacing of the saw-tooth steps (:func:`teeth_at`,
+#: whose stated bounds are those of one half)
+_SPACING = 0.5
+#: relative excess of a bond's fracture energy over its elastic energy at the crack below
+#: which the teeth cannot be told apart in floating point: such a bond breaks at once
+MIN_EXCESS = 1e-9
 
 
 @dataclass(frozen=True)
@@ -170,21 +174,25 @@ def bond_strength(principal: np.ndarray, ft_bond: np.ndarray, factors=None) -> n
     return s
 
 
-def _tooth_openings(ratio, n_teeth: int) -> np.ndarray:
+def _tooth_openings(ratio: np.ndarray, n_teeth: int) -> np.ndarray:
     """Elongations of the teeth over the crack elongation, ``x_i`` in [1, ``ratio``):
-    the roots of ``psi(x) = i / n`` (closed form through the Wright omega function)."""
+    the roots of ``psi(x) = i / n`` (closed form through the Wright omega function; the
+    linear limit ``1 + (R - 1) i / n`` for ``R`` within 1e-6 of 1)."""
     from scipy.special import wrightomega
 
     ratio = np.asarray(ratio, float)[:, None]
-    a = SPACING / np.log(ratio)
-    b = (1.0 - SPACING) / (ratio - 1.0)
     level = np.arange(n_teeth)[None, :] / n_teeth
+    near_one = ratio - 1.0 < 1e-6
+    r = np.where(near_one, 2.0, ratio)
+    a = _SPACING / np.log(r)
+    b = (1.0 - _SPACING) / (r - 1.0)
     x = (a / b) * np.real(wrightomega(np.log(b / a) + (level + b) / a))
+    x = np.where(near_one, 1.0 + (ratio - 1.0) * level, np.minimum(x, ratio))
     x[:, 0] = 1.0
-    return np.minimum(x, ratio)
+    return x
 
 
-def _teeth_energy(ratio, n_teeth: int):
+def _teeth_energy(ratio: np.ndarray, n_teeth: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Teeth of bonds with ``delta_u / delta_p = ratio``: spring factors, elongations
     over ``delta_p``, and the release over ``k delta_p^2 / 2``."""
     x = _tooth_openings(ratio, n_teeth)
@@ -201,18 +209,18 @@ def teeth_at(spring, peak, energy, n_teeth: int = 30):
     ``(delta_u, 0)``; tooth ``i`` (0 the crack itself) at the elongation ``delta_i =
     delta_p x_i`` where ``psi(x_i) = i / n``, with (``R = delta_u / delta_p``)::
 
-        psi(x) = SPACING ln(x) / ln(R) + (1 - SPACING) (x - 1) / (R - 1),
+        psi(x) = ln(x) / (2 ln R) + (x - 1) / (2 (R - 1)),
 
     half logarithmic, half linear: every tooth opens the bond by at most a factor
-    ``R^(2/n)`` and lowers its force by at most ``2 k delta_p / n``. (Equal force steps
-    alone let the first tooth jump to ``delta_p + delta_u / n``: with the ``R`` of 50-400
-    of bonds a few millimetres long in concrete, the bond lost 66-94 % of its stiffness at
-    once, its load went to its neighbours, and a band of barely softened bonds grew with
-    mesh refinement: the notched beam released 1.26 x Gf x ligament at h = 5 mm.) The
-    spring factor of tooth ``i`` is the secant ``d_i = force_i / (k delta_i)``; after the
-    last tooth the bond is removed. Breaking at tooth ``i`` releases ``k (d_i - d_{i+1})
-    delta_i^2 / 2``; ``delta_u`` is solved (bisection) so that the teeth release
-    ``energy``.
+    ``R^(2/n)`` further than the one before, and successive tooth peaks differ in force
+    by at most ``2 k delta_p / n``. (Equal force steps alone put the first tooth at
+    ``delta_p + (delta_u - delta_p) / n``: with the ``R`` of about 30-95 of the notched
+    beam's bonds (h = 10-5 mm) the bond lost 49-76 % of its stiffness at once, its load
+    went to its neighbours, and a band of barely softened bonds grew with mesh
+    refinement: the beam released 1.26 x Gf x ligament at h = 5 mm.) The spring factor
+    of tooth ``i`` is the secant ``d_i = force_i / (k delta_i)``; after the last tooth
+    the bond is removed. Breaking at tooth ``i`` releases ``k (d_i - d_{i+1}) delta_i^2 /
+    2``; ``delta_u`` is solved (bisection) so that the teeth release ``energy``.
 
     Parameters
     ----------
@@ -228,9 +236,22 @@ def teeth_at(spring, peak, energy, n_teeth: int = 30):
         Spring factors, ``d[:, 0] = 1``.
     delta : ndarray, shape (n, n_teeth)
         Elongation at which each tooth breaks.
+
+    Raises
+    ------
+    ValueError
+        If an ``energy`` is not above the elastic energy ``spring * peak^2 / 2`` (by a
+        relative :data:`MIN_EXCESS`).
     """
     k, dp, target = (np.atleast_1d(np.asarray(a, float)) for a in (spring, peak, energy))
     tau = target / (0.5 * k * dp**2)
+    if not np.all(tau > 1.0 + MIN_EXCESS):
+        e = int(np.argmin(np.where(np.isnan(tau), -np.inf, tau)))
+        raise ValueError(
+            f"energy {target[e]:.4g} of bond {e} must exceed its elastic energy at the "
+            f"crack, spring * peak^2 / 2 = {0.5 * k[e] * dp[e] ** 2:.4g}, by a relative "
+            f"{MIN_EXCESS:g}"
+        )
     lo, hi = np.full_like(tau, 1.0), np.maximum(4.0 * tau, 2.0)
     for _ in range(200):
         short = _teeth_energy(hi, n_teeth)[2] < tau
