@@ -103,9 +103,10 @@ def test_saw_tooth_of_a_nearly_brittle_bond_and_a_refused_energy():
 
 @pytest.mark.parametrize("n", [2, 5, 30])
 def test_saw_tooth_steps_are_gradual_in_opening_and_force(n):
-    """No tooth opens a bond by more than R^(2/n) nor drops its force by more than 2/n
-    of its strength (R = delta_u / delta_p), over brittle to very ductile bonds; the
-    teeth peak on the linear softening line."""
+    """No tooth opens a bond more than R^(2/n) further than the one before, and
+    successive tooth peaks differ in force by at most 2/n of the strength (R = delta_u /
+    delta_p), over brittle to very ductile bonds; the teeth peak on the linear softening
+    line."""
     k, peak = np.full(4, 2e4), np.full(4, 1e-4)
     energy = 0.5 * k * peak**2 * np.array([1.5, 20.0, 400.0, 5e4])
     d, delta = teeth_at(k, peak, energy, n_teeth=n)

@@ -135,11 +135,11 @@ def petersson(h: float, model=dv.DV, kind: str = "jittered") -> dict:
         "curve": {"deflection": d.tolist(), "load": p.tolist()},
     }
     print(
-        f"  {model.__name__} {kind} h = {h:g} mm: {out['nodes']} nodes, {out['events']} "
-        "events, peak "
-        f"{out['peak_kN']:.3f} kN at {out['peak_deflection']:.3f} mm, dissipated "
-        f"{out['dissipated_Nmm']:.0f} N mm = {out['dissipated_Nmm'] / target:.2f} Gf x "
-        f"ligament x t, max residual {out['max_residual']:.1e}"
+        f"  {model.__name__} {kind} h = {h:g} mm: {out['nodes']} nodes, "
+        f"{out['events']} events, peak {out['peak_kN']:.3f} kN at "
+        f"{out['peak_deflection']:.3f} mm, dissipated {out['dissipated_Nmm']:.0f} N mm = "
+        f"{out['dissipated_Nmm'] / target:.2f} Gf x ligament x t, "
+        f"max residual {out['max_residual']:.1e}"
     )
     return out
 

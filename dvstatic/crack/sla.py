@@ -217,7 +217,7 @@ _WARNED: set[str] = set()
 def _warn_rows(mesh: Mesh) -> None:
     """Say once that a mesh of lattice rows steers cracks along its rows."""
     sampling = mesh.sampling
-    if sampling is not None and sampling.kind in {"lattice", "jittered"} - _WARNED:
+    if sampling is not None and sampling.has_rows and sampling.kind not in _WARNED:
         _WARNED.add(sampling.kind)
         log.warning(
             "mesh kind %r has lattice rows: cracks tend to run along them (0, 60 or 120 "

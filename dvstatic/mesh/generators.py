@@ -35,7 +35,7 @@ from .grid import (
     random_rectangle_points,
 )
 from .ordering import spatial_order
-from .recipe import Sampling
+from .recipe import ROW_KINDS, Sampling
 from .sampling import cell_centroids, unit_disc
 
 __all__ = [
@@ -176,7 +176,7 @@ def generate(
             "h",
         )
     kind, jitter, rng = check_sampling(kind, jitter, seed)
-    grid = Grid.fitted(*domain.bbox, h) if kind in ("lattice", "jittered") else None
+    grid = Grid.fitted(*domain.bbox, h) if kind in ROW_KINDS else None
     bnd, seg_a, seg_b = _loop_points(domain.loops, h, grid)
     inner = _interior_points(domain, h, "random" if kind == "cvt" else kind, jitter, rng, grid)
     inner = _gabriel(inner, seg_a, seg_b)
@@ -188,7 +188,7 @@ def _graded(domain: Domain, h: SizeField, kind: str, seed) -> Mesh:
     """A mesh whose spacing follows the size field ``h``: CVT of density 1 / h^2
     (``kind="random"``: the random points only)."""
     kind, _, rng = check_sampling(kind, 0.0, seed)
-    if kind in ("lattice", "jittered"):
+    if kind in ROW_KINDS:
         log.info("a size field makes a CVT mesh (kind %r ignored)", kind)
         kind = "cvt"
     bnd, seg_a, seg_b = _loop_points(domain.loops, h)

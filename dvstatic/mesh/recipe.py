@@ -13,7 +13,10 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-__all__ = ["Sampling"]
+__all__ = ["Sampling", "ROW_KINDS"]
+
+#: kinds whose points keep the rows of a triangular lattice
+ROW_KINDS = ("lattice", "jittered")
 
 
 @dataclass(frozen=True)
@@ -54,6 +57,11 @@ class Sampling:
         if not np.isfinite(self.h) or self.h <= 0:
             return replace(self, perturbations=self.perturbations + (float("nan"),))
         return replace(self, perturbations=self.perturbations + (float(amplitude) / self.h,))
+
+    @property
+    def has_rows(self) -> bool:
+        """True if the points keep the rows of a triangular lattice (cracks follow them)."""
+        return self.kind in ROW_KINDS
 
     @property
     def reproducible(self) -> bool:
