@@ -16,9 +16,8 @@ effort: an unconverged result was written, 130 interrupted.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import logging
-import os
-import shutil
 import subprocess
 import sys
 import time
@@ -80,14 +79,7 @@ def _run(args: argparse.Namespace) -> int:
     from .solvers import solve
 
     sc = scene.load(args.scene, args.set or ())
-    out_dir = Path(args.out) if args.out else Path(f"{sc.name}-out")
-    if out_dir.exists() and any(out_dir.iterdir()) and not args.overwrite:
-        raise scene.SceneError(
-            sc.path,
-            "",
-            f"output folder {out_dir} exists and is not empty; "
-            "pass --overwrite to replace its files or choose --out",
-        )
+    folder = _output_folder(sc, args)
     t0 = time.perf_counter()
     say = _Stages(not args.quiet)
     say("building the mesh")
@@ -98,7 +90,7 @@ def _run(args: argparse.Namespace) -> int:
     loads = sc.build_loads(mesh)
     sc.check_outputs(mesh)  # before the solve, not after it
     if sc.data["fracture"] is not None:
-        return _run_fracture(sc, model, supports, loads, out_dir, args, say, t0)
+        return _run_fracture(sc, model, supports, loads, folder, args, say, t0)
     say(f"solving ({model.kind}, {2 * mesh.n_points} dof)")
     try:
         sol = solve(model, supports, loads, progress=_show_progress(args), **sc.solve_options())
@@ -111,8 +103,8 @@ def _run(args: argparse.Namespace) -> int:
         return 0
     fe = _fe_reference(sc, mesh, supports, loads, say)
     say("recovering stresses and writing the outputs")
-    data, written = _write_outputs(sc, sol, fe, out_dir, args, t0)
-    _print_summary(sc, data, [out_dir / w for w in written])
+    data, written = _write_outputs(sc, sol, fe, folder, args, t0)
+    _print_summary(sc, data, written)
     if not sol.info.converged:
         print(
             f"warning: the solution did NOT converge (best effort): {sol.info.failure}",
@@ -122,7 +114,7 @@ def _run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _run_fracture(sc, model, supports, loads, out_dir: Path, args, say, t0: float) -> int:
+def _run_fracture(sc, model, supports, loads, folder, args, say, t0: float) -> int:
     """``[fracture]``: the event-driven analysis, its JSON, curve and VTU series."""
     from . import io
     from .crack import fracture
@@ -139,40 +131,94 @@ def _run_fracture(sc, model, supports, loads, out_dir: Path, args, say, t0: floa
         raise _scene_error(sc, _fracture_key(sc, exc.param), exc) from None
     say("writing the outputs")
     o, name = sc.data["output"], sc.name
-    stage = out_dir.parent / f".{out_dir.name}.staging-{os.getpid()}"
-    shutil.rmtree(stage, ignore_errors=True)
-    stage.mkdir(parents=True)
-    written = []
-    try:
+    with _staged(folder) as stage:
+        written = []
         data = res.to_dict()
         data["checks"] = fracture_checks(res, sc.data["fracture"]["checks"])
         data["model"] = repr(model)
-        data["scene"] = {
-            "file": str(sc.path),
-            "title": sc.data["title"],
-            "overrides": list(args.set or ()),
-            "resolved": sc.data,
-        }
+        data["scene"] = _scene_record(sc, args)
         data["dvstatic_version"] = __version__
         data["created"] = datetime.now(UTC).isoformat(timespec="seconds")
         data["seconds_total"] = time.perf_counter() - t0
         if o["png"] and res.events:
-            written.append(
-                io.write_fracture_curve(
-                    stage / f"{name}_curve.png", res, sc.data["title"] or None
-                ).name
+            curve = io.write_fracture_curve(
+                stage / f"{name}_curve.png", res, sc.data["title"] or None
             )
+            written.append(curve.name)
         if o["vtu"]:
             pvd = io.write_fracture_series(stage / f"{name}_fracture", res, name)
-            written.append(f"{name}_fracture/{pvd.name}")
+            series = sorted(p.relative_to(stage).as_posix() for p in pvd.parent.iterdir())
+            written += [pvd.relative_to(stage).as_posix()] + [
+                n for n in series if not n.endswith(".pvd")
+            ]
         written.append(io.write_json(stage / f"{name}_fracture.json", data).name)
-        _swap_in(stage, out_dir)
-    except BaseException:
-        shutil.rmtree(stage, ignore_errors=True)
-        raise
+        final = folder.commit(written, owner=_owner(sc))
     title = f"{sc.data['title'] or sc.name}"
-    print("\n".join(fracture_lines(res, data["checks"], title, [out_dir / w for w in written])))
+    shown = [p for p in final if p.suffix != ".vtu" or p.parent == folder.path]
+    print("\n".join(fracture_lines(res, data["checks"], title, shown)))
     return 130 if res.stop_reason == "interrupted" else 0
+
+
+def _planned_outputs(sc) -> list[str]:
+    """The files a run of the scene writes whatever its results (relative to the
+    output folder): checked before any work starts."""
+    o, name = sc.data["output"], sc.name
+    if sc.data["fracture"] is not None:
+        return [
+            *([f"{name}_curve.png"] if o["png"] else []),
+            *([f"{name}_fracture/{name}.pvd"] if o["vtu"] else []),
+            f"{name}_fracture.json",
+        ]
+    return [
+        *([f"{name}.vtu", f"{name}_bonds.vtu"] if o["vtu"] else []),
+        *([f"{name}.png"] if o["png"] else []),
+        *([f"{name}.json"] if o["json"] else []),
+    ]
+
+
+def _output_folder(sc, args):
+    """The run's output folder, checked before any work: ``--out`` or
+    ``<scene name>-out``; refuses a file, outputs that would replace an input, and
+    existing outputs without ``--overwrite``."""
+    from .outfolder import OutputFolder
+
+    out = Path(args.out) if args.out else Path(f"{sc.name}-out")
+    inputs = [sc.path]
+    if sc.data["mesh"]["type"] == "file":
+        mesh_file = Path(sc.data["mesh"]["path"])
+        inputs.append(mesh_file if mesh_file.is_absolute() else sc.path.parent / mesh_file)
+    folder = OutputFolder(out, overwrite=args.overwrite, protect=inputs)
+    folder.check(_planned_outputs(sc))
+    return folder
+
+
+def _owner(sc) -> str:
+    """The scene file as the manifest records the files it wrote."""
+    return str(Path(sc.path).resolve())
+
+
+def _scene_record(sc, args) -> dict:
+    return {
+        "file": str(sc.path),
+        "title": sc.data["title"],
+        "overrides": list(args.set or ()),
+        "resolved": sc.data,  # every key, defaults filled in
+    }
+
+
+@contextlib.contextmanager
+def _staged(folder):
+    """The folder's staging area; says what was (not) written if the block fails."""
+    try:
+        with folder.staging() as stage:
+            yield stage
+    except BaseException:
+        print(
+            "stopped before the outputs were complete: nothing was written "
+            f"({folder.path} {folder.state()})",
+            file=sys.stderr,
+        )
+        raise
 
 
 def _fracture_key(sc, param: str) -> str:
@@ -228,21 +274,17 @@ def _fe_reference(sc, mesh, supports, loads, say):
     )
 
 
-def _write_outputs(sc, sol, fe, out_dir: Path, args, t0: float) -> tuple[dict, list[str]]:
-    """Write VTU, PNG and JSON into a staging folder next to ``out_dir`` and swap it in
-    only when complete: an interrupted or failed run leaves earlier results as they
-    were. Returns the summary data and the file names written."""
+def _write_outputs(sc, sol, fe, folder, args, t0: float) -> tuple[dict, list[Path]]:
+    """Write VTU, PNG and JSON into the output folder's staging area and move them onto
+    their names only when all are complete: an interrupted or failed run leaves
+    earlier results as they were. Returns the summary data and the paths written."""
     from . import io
 
     o = sc.data["output"]
     # one stress recovery for every output: nonlinear solutions have only the virial
     method = None if sol.info.nonlinear else o["stress"]
-    out_dir.parent.mkdir(parents=True, exist_ok=True)
-    stage = out_dir.parent / f".{out_dir.name}.staging-{os.getpid()}"
-    shutil.rmtree(stage, ignore_errors=True)
-    stage.mkdir()
-    written: list[str] = []
-    try:
+    with _staged(folder) as stage:
+        written: list[str] = []
         if o["vtu"]:
             written.append(io.write_vtu(stage / f"{sc.name}.vtu", sol).name)
             written.append(io.write_bonds_vtu(stage / f"{sc.name}_bonds.vtu", sol).name)
@@ -265,12 +307,7 @@ def _write_outputs(sc, sol, fe, out_dir: Path, args, t0: float) -> tuple[dict, l
             stress=method,
             checks=o["checks"],
         )
-        data["scene"] = {
-            "file": str(sc.path),
-            "title": sc.data["title"],
-            "overrides": list(args.set or ()),
-            "resolved": sc.data,  # every key, defaults filled in
-        }
+        data["scene"] = _scene_record(sc, args)
         if o["png"]:
             data["picture"] = {"file": png.name, "field": o["field"], "magnification": scale}
         data["dvstatic_version"] = __version__
@@ -278,16 +315,8 @@ def _write_outputs(sc, sol, fe, out_dir: Path, args, t0: float) -> tuple[dict, l
         data["seconds_total"] = time.perf_counter() - t0
         if o["json"]:
             written.append(io.write_json(stage / f"{sc.name}.json", data).name)
-        _swap_in(stage, out_dir)
-    except BaseException:
-        shutil.rmtree(stage, ignore_errors=True)
-        state = "left unchanged" if out_dir.exists() else "not created"
-        print(
-            f"stopped before the outputs were complete: nothing was written ({out_dir} {state})",
-            file=sys.stderr,
-        )
-        raise
-    return data, written
+        final = folder.commit(written, owner=_owner(sc))
+    return data, final
 
 
 def _solve_error_key(scene, exc: InputError) -> str:
@@ -296,22 +325,6 @@ def _solve_error_key(scene, exc: InputError) -> str:
     if exc.param in options:
         return f"solver.{options[exc.param]}"
     return "supports" if exc.param == "supports" else ""
-
-
-def _swap_in(stage: Path, out_dir: Path) -> None:
-    """Replace ``out_dir`` by the complete ``stage`` folder (renames only)."""
-    old = None
-    if out_dir.exists():
-        old = out_dir.parent / f".{out_dir.name}.previous-{os.getpid()}"
-        os.replace(out_dir, old)
-    try:
-        os.replace(stage, out_dir)
-    except BaseException:
-        if old is not None:
-            os.replace(old, out_dir)
-        raise
-    if old is not None:
-        shutil.rmtree(old, ignore_errors=True)
 
 
 def _model_line(md: dict) -> str:
@@ -528,7 +541,9 @@ def _parser() -> argparse.ArgumentParser:
         help="override a scene value, e.g. --set mesh.h=0.05 (repeatable)",
     )
     p_run.add_argument(
-        "--overwrite", action="store_true", help="write into an existing, non-empty output folder"
+        "--overwrite",
+        action="store_true",
+        help="replace this run's files where they exist (nothing else is touched)",
     )
     p_run.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
     p_run.set_defaults(func=_run)
@@ -586,6 +601,9 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     except (ValueError, TypeError, FileNotFoundError) as exc:
         print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:  # a folder that cannot be written, a full disk
+        print(f"error: {exc.strerror or exc}: {exc.filename or ''}".rstrip(": "), file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)

@@ -4,7 +4,9 @@
 # copied here), run every example, and check what a newcomer would see:
 #   * no output of any command contains "Traceback";
 #   * every example prints its key numbers against their references ("check: ...");
-#   * every example writes its VTU, PNG and JSON.
+#   * every example writes its VTU, PNG and JSON;
+#   * --overwrite into a folder of the user's (notes, a subfolder, the scene itself,
+#     --out .) replaces only the run's own files, twice over.
 #
 # Usage: bash scripts/newcomer.sh [REPOSITORY]   (default: this checkout)
 # Takes about 10 minutes on 2 cores (the test suite is most of it). Exit 0 when all is
@@ -63,6 +65,21 @@ for scene in examples/*.toml; do
         done
     fi
 done
+
+# data loss: a folder with foreign files, a subfolder and the scene inside it, two runs
+p="$work/mine"
+mkdir -p "$p/sub" && echo x >"$p/notes.txt" && echo y >"$p/sub/keep.dat"
+cp examples/uniaxial.toml "$p/"
+for run in 1 2; do
+    .venv/bin/dvstatic run "$p/uniaxial.toml" --out "$p" --overwrite -q >"$log/mine$run.txt" 2>&1 ||
+        fail "run $run into a folder of the user's exited non-zero"
+done
+(cd "$p" && ../dvstatic/.venv/bin/dvstatic run uniaxial.toml --out . --overwrite -q >"$log/dot.txt" 2>&1) ||
+    fail "--out . --overwrite exited non-zero"
+for f in notes.txt sub/keep.dat uniaxial.toml uniaxial.json uniaxial.png uniaxial.vtu; do
+    [ -s "$p/$f" ] || fail "after --overwrite into the user's folder, $f is missing"
+done
+echo "== --overwrite into a folder of the user's: kept $(cd "$p" && ls -A | tr '\n' ' ')"
 
 if grep -l "Traceback" "$log"/*.txt >/dev/null 2>&1; then
     for f in $(grep -l "Traceback" "$log"/*.txt); do fail "Traceback in $(basename "$f")"; done

@@ -8,7 +8,7 @@ The layers (each module imports only from its own layer or those below it):
     3 problem     dvstatic.problem
     4 solvers     dvstatic.solvers.*
     5 parallel    dvstatic.parallel.*
-    6 outputs     dvstatic.post, fem.*, io, plot
+    6 outputs     dvstatic.post, fem.*, io, outfolder, plot
     7 front door  dvstatic.scene.*, cli, __main__
     8 facade      dvstatic (the package's __init__)
 
@@ -49,6 +49,7 @@ LAYERS = {
     "dvstatic.post": 6,
     "dvstatic.fem": 6,
     "dvstatic.io": 6,
+    "dvstatic.outfolder": 6,
     "dvstatic.report": 6,
     "dvstatic.plot": 6,
     "dvstatic.scene": 7,

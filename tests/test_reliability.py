@@ -115,11 +115,12 @@ def test_interrupted_run_leaves_earlier_results(tmp_path, capsys, monkeypatch):
     assert code == 130
     assert (out / "earlier.txt").read_text() == "keep me"
     assert sorted(p.name for p in out.iterdir()) == ["earlier.txt"]
-    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".o.")]  # no staging left
+    assert not [p for p in out.iterdir() if p.name.startswith(".dvstatic-staging")]
     assert "nothing was written" in capsys.readouterr().err
     monkeypatch.undo()
     assert cli.main(["run", str(scene), "--out", str(out), "--quiet", "--overwrite"]) == 0
-    assert sorted(p.name for p in out.iterdir()) == ["s.json", "s.vtu", "s_bonds.vtu"]
+    names = sorted(p.name for p in out.iterdir() if p.name != ".dvstatic-manifest.json")
+    assert names == ["earlier.txt", "s.json", "s.vtu", "s_bonds.vtu"]
 
 
 def test_every_solution_is_checked():

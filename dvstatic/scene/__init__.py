@@ -34,6 +34,8 @@ def load(path: str | Path, overrides=()) -> Scene:
     SceneError
     """
     path = Path(path)
+    if path.is_dir():
+        raise SceneError(path, "", "is a folder, not a scene file (a .toml file)")
     if not path.is_file():
         raise SceneError(path, "", "scene file not found")
     return Scene(path, parse(path, path.read_bytes(), overrides))
