@@ -32,6 +32,7 @@ MOVED = {
     "dvstatic.stability": "dvstatic.solvers.stability",
     "dvstatic.distributed": "dvstatic.parallel.partition",
     "dvstatic.petsc_solve": "dvstatic.parallel.petsc",
+    "dvstatic.lattice.stress": "dvstatic.stress.virial",
 }
 #: names that moved to another name or module: (old module, name) -> "module:name"
 RENAMED = {

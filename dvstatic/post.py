@@ -14,11 +14,11 @@ import numpy as np
 
 from ._checks import as_displacement, as_strain, check_positive
 from .errors import InputError
-from .lattice import VoronoiModel
+from .lattice import VoronoiModel, check_model
 from .lattice.operator import virial_sum
-from .lattice.stress import bond_state, check_model, node_stress, strain_stress
 from .material import SQ2, plane_stress_tensor, to_mandel
 from .mesh.locate import interpolate
+from .stress import bond_state, node_stress, strain_stress
 
 __all__ = [
     "virial_stress",

@@ -28,7 +28,7 @@ FIELDS = ("|u|", "ux", "uy", "sxx", "syy", "sxy", "szz", "von_mises")
 
 
 def _szz(solution, s: np.ndarray) -> np.ndarray:
-    from .lattice.stress import out_of_plane_stress
+    from .stress import out_of_plane_stress
 
     return out_of_plane_stress(solution.model, s)
 

@@ -5,7 +5,7 @@ The layers (each module imports only from its own layer or those below it):
     0 foundation  _checks _cache _env _planar _version _compat errors material linalg
     1 mesh        dvstatic.mesh.*, dvstatic.domain
     2 lattice     dvstatic.lattice.*
-    3 problem     dvstatic.problem
+    3 problem     dvstatic.problem, dvstatic.stress.* (stresses of lattice states)
     4 solvers     dvstatic.solvers.*
     5 parallel    dvstatic.parallel.*
     6 outputs     dvstatic.post, fem.*, io, outfolder, plot
@@ -43,6 +43,7 @@ LAYERS = {
     "dvstatic.domain": 1,
     "dvstatic.lattice": 2,
     "dvstatic.problem": 3,
+    "dvstatic.stress": 3,
     "dvstatic.solvers": 4,
     "dvstatic.parallel": 5,
     "dvstatic.crack": 5,

@@ -344,3 +344,47 @@ def cook() -> Benchmark:
         plane="strain",
         fe_reference=reference,
     )
+
+
+# ------------------------------------------------------------------ NAFEMS LE1
+#: NAFEMS LE1 (elliptic membrane): syy at point D (2, 0), the published target
+LE1_SYY_D = 92.7
+
+
+def le1() -> Benchmark:
+    """NAFEMS LE1: a quarter of an elliptic membrane between the ellipses
+    (x/2)^2 + y^2 = 1 and (x/3.25)^2 + (y/2.75)^2 = 1, outward pressure 10 (MPa) on the
+    outer edge, symmetry rollers on the axes, E = 210e3, nu = 0.3, plane stress;
+    target syy = 92.7 at D = (2, 0) (NAFEMS, "The standard NAFEMS benchmarks", 1990).
+    The field reference is fine P2 FE."""
+    E, nu = 210e3, 0.3
+
+    def make(h, **kw):
+        path = dv.domain.Path(
+            (
+                dv.domain.Line((2.0, 0.0), (3.25, 0.0), "bottom"),
+                dv.domain.EllipseArc((0.0, 0.0), 3.25, 2.75, 0.0, 0.0, 90.0, "outer"),
+                dv.domain.Line((0.0, 2.75), (0.0, 1.0), "left"),
+                dv.domain.EllipseArc((0.0, 0.0), 2.0, 1.0, 0.0, 90.0, 0.0, "inner"),
+            )
+        )
+        return dv.mesh.generate(dv.domain.Domain(path), h, **kw)
+
+    def problem(mesh):
+        return [dv.Fix("left", x=0.0), dv.Fix("bottom", y=0.0)], [dv.Pressure("outer", -10.0)]
+
+    def reference():
+        mesh = make(0.05, kind="lattice")
+        return dv.fem.solve(mesh, E, nu, *problem(mesh), order=2, refine=1)
+
+    area = np.pi * (3.25 * 2.75 - 2.0 * 1.0) / 4
+    return Benchmark(
+        "NAFEMS LE1 (elliptic membrane)",
+        E,
+        nu,
+        area,
+        make,
+        problem,
+        keys=[KeyValue("syy at D", (2.0, 0.0), "syy", LE1_SYY_D, "NAFEMS LE1 target")],
+        fe_reference=reference,
+    )

@@ -4,7 +4,7 @@ foundation and the mesh layer only)."""
 
 from . import calibration
 from .geometry import Geometry
-from .models import BONDS, DV, RV, VoronoiModel, voronoi_weights
+from .models import BONDS, DV, RV, VoronoiModel, check_model, voronoi_weights
 from .operator import LatticeOperator, scatter_bond_forces, virial_sum
 
 __all__ = [
@@ -14,6 +14,7 @@ __all__ = [
     "DV",
     "RV",
     "VoronoiModel",
+    "check_model",
     "voronoi_weights",
     "LatticeOperator",
     "scatter_bond_forces",

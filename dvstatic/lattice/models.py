@@ -42,7 +42,7 @@ if TYPE_CHECKING:  # annotations only: scipy is imported where it is used
 
 log = logging.getLogger(__name__)
 
-__all__ = ["DV", "RV", "VoronoiModel", "voronoi_weights", "BONDS"]
+__all__ = ["DV", "RV", "VoronoiModel", "voronoi_weights", "BONDS", "check_model"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -373,6 +373,13 @@ class VoronoiModel:
             f"k_n={self.k_n:.6g}, nu_m={self.nu_m:.6g}, calibration={self.micro.calibration!r}, "
             f"bonds={self.bonds!r}{extra})"
         )
+
+
+def check_model(model) -> VoronoiModel:
+    """``model`` if it is a DV or RV model (TypeError otherwise)."""
+    if not isinstance(model, VoronoiModel):
+        raise TypeError(f"model must be a dvstatic DV or RV model, got {type(model).__name__}")
+    return model
 
 
 def _bond_mix(geom: _geometry.Geometry, mesh: Mesh, k_tri: np.ndarray) -> np.ndarray:

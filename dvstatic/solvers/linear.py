@@ -19,7 +19,7 @@ from ..errors import ConvergenceError, SingularError, UnstableError
 from ..lattice import VoronoiModel
 from ..linalg import AMGSolver, ConstrainedSystem, DirectSolver, rigid_modes
 from ..mesh import mesh_dof_order
-from .result import SolveInfo, StabilityCheck
+from .info import SolveInfo, StabilityCheck
 from .stability import CHECK_MAX_DOF, stability
 
 log = logging.getLogger(__name__)

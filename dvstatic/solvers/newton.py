@@ -29,8 +29,8 @@ from ..lattice import VoronoiModel
 from ..lattice.operator import scatter_bond_forces
 from ..linalg import ConstrainedSystem
 from ..problem import FollowerPressures
+from .info import NewtonStep, SolveInfo
 from .options import SolveOptions
-from .result import NewtonStep, SolveInfo
 from .tangent import TangentSolver
 
 log = logging.getLogger(__name__)

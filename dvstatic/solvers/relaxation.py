@@ -28,7 +28,7 @@ import numpy as np
 
 from ..errors import ConvergenceError, UnstableError
 from ..lattice import VoronoiModel
-from .result import SolveInfo
+from .info import SolveInfo
 
 log = logging.getLogger(__name__)
 

@@ -10,9 +10,8 @@ import time
 import numpy as np
 
 from ..errors import ConvergenceError, InputError
-from ..lattice import VoronoiModel
+from ..lattice import VoronoiModel, check_model
 from ..lattice import geometry as _geometry
-from ..lattice.stress import check_model
 from ..problem import FollowerPressures, as_list, check_restrained, constraints, load_vector
 from ..problem.follower import split_followers
 from . import backends

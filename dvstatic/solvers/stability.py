@@ -15,8 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..lattice import LatticeOperator, VoronoiModel, calibration
-from ..lattice.stress import check_model
+from ..lattice import LatticeOperator, VoronoiModel, calibration, check_model
 from ..problem import constraints
 
 log = logging.getLogger(__name__)

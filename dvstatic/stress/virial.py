@@ -1,5 +1,5 @@
-"""Stress of a lattice state: bond states, the virial (force-based) stress per Voronoi
-cell, and the kinematic (strain-based) recovery.
+"""The lattice's own stresses: bond states, the virial (force-based) stress per
+Voronoi cell, the P1 strain of every triangle and the continuum law applied to it.
 
 Stress conventions: 2x2 Cauchy stress (force per length for unit thickness, i.e.
 units of E).
@@ -10,16 +10,17 @@ from __future__ import annotations
 import numpy as np
 
 from .._checks import as_displacement
-from .models import VoronoiModel
+from ..lattice import VoronoiModel, check_model
+from ..mesh import Mesh
 
-__all__ = ["bond_state", "node_stress", "strain_stress", "out_of_plane_stress", "check_model"]
-
-
-def check_model(model) -> VoronoiModel:
-    """``model`` if it is a DV or RV model (TypeError otherwise)."""
-    if not isinstance(model, VoronoiModel):
-        raise TypeError(f"model must be a dvstatic DV or RV model, got {type(model).__name__}")
-    return model
+__all__ = [
+    "bond_state",
+    "node_stress",
+    "strain_stress",
+    "triangle_strains",
+    "triangle_stress",
+    "out_of_plane_stress",
+]
 
 
 def bond_state(model: VoronoiModel, u, strain=None, linear: bool = True):
@@ -62,39 +63,48 @@ def node_stress(model: VoronoiModel, u, linear: bool = True) -> np.ndarray:
     return (out / (model.t * area[:, None])).reshape(n, 2, 2)
 
 
-def strain_stress(model: VoronoiModel, u) -> np.ndarray:
-    """Kinematic stress recovery: plane-stress law applied to the lattice strain.
+def triangle_strains(mesh: Mesh, u) -> np.ndarray:
+    """P1 strain ``(exx, eyy, exy)`` of every triangle, shape (M, 3) (tensor shear)."""
+    x = mesh.triangle_coordinates()
+    ut = np.asarray(u).reshape(-1, 2)[mesh.triangles]
+    d1, d2 = x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]
+    det = d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]
+    inv = (
+        np.stack([np.c_[d2[:, 1], -d2[:, 0]], np.c_[-d1[:, 1], d1[:, 0]]], axis=1)
+        / det[:, None, None]
+    )
+    du = np.stack([ut[:, 1] - ut[:, 0], ut[:, 2] - ut[:, 0]], axis=1)  # (M, 2 edges, 2 comps)
+    grad = np.einsum("mej,mei->mij", inv, du)  # grad[m, i, j] = d u_i / d x_j
+    return np.c_[grad[:, 0, 0], grad[:, 1, 1], 0.5 * (grad[:, 0, 1] + grad[:, 1, 0])]
 
-    The displacement is interpolated linearly on each triangle, the triangle strains
-    are averaged to the nodes (weighted by triangle area) and mapped through the
-    plane-stress law of the model's E and nu (each triangle's own material, and the
-    effective constants in plane strain). Unlike the virial (force-based) stress,
-    this does not see the extra force the paper's uniform ``k_n`` puts into the
-    surface bonds (about 1.7x the true stress parallel to a free edge of a lattice), so
-    it is the better estimate of surface stresses such as stress concentrations.
 
-    Returns
-    -------
-    ndarray, shape (N, 2, 2)
-    """
+def triangle_stress(model: VoronoiModel, u) -> np.ndarray:
+    """The continuum law of each triangle's material applied to its P1 strain, shape
+    (M, 2, 2) (in-plane stress; plane strain: the effective constants): the lattice's
+    stress at the scale of one triangle, micro-structure and all."""
     model = check_model(model)
     mesh = model.mesh
-    u = as_displacement(u, mesh.n_points)
-    x = model.geometry.x_tri
-    ut = u[mesh.triangles]
-    a, b = x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]
-    det = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
-    # gradients of the barycentric functions 1 and 2
-    g1 = np.c_[b[:, 1], -b[:, 0]] / det[:, None]
-    g2 = np.c_[-a[:, 1], a[:, 0]] / det[:, None]
-    du1, du2 = ut[:, 1] - ut[:, 0], ut[:, 2] - ut[:, 0]
-    grad = du1[:, :, None] * g1[:, None, :] + du2[:, :, None] * g2[:, None, :]  # (M, 2, 2)
-    eps = 0.5 * (grad + grad.transpose(0, 2, 1))
-    sig = np.empty_like(eps)
-    for k, material in enumerate(model.all_materials):
-        sel = model.material_of_triangle == k
-        sig[sel] = material.stress(eps[sel])
-    return _to_nodes(mesh, model.geometry.tri_area, sig.reshape(-1, 4)).reshape(-1, 2, 2)
+    eps = triangle_strains(mesh, as_displacement(u, mesh.n_points))
+    consts = np.array([m.in_plane for m in model.all_materials])[model.material_of_triangle]
+    E, nu = consts[:, 0], consts[:, 1]
+    c = E / (1 - nu**2)
+    sxx = c * (eps[:, 0] + nu * eps[:, 1])
+    syy = c * (eps[:, 1] + nu * eps[:, 0])
+    sxy = E / (1 + nu) * eps[:, 2]
+    return np.stack([np.stack([sxx, sxy], -1), np.stack([sxy, syy], -1)], -2)
+
+
+def strain_stress(model: VoronoiModel, u) -> np.ndarray:
+    """Kinematic stress: :func:`triangle_stress` averaged to the nodes (weighted by
+    triangle area), shape (N, 2, 2).
+
+    Unlike the virial (force-based) stress, this does not see the extra force the
+    paper's uniform ``k_n`` puts into the surface bonds (about 1.7x the true stress
+    parallel to a free edge of a lattice).
+    """
+    model = check_model(model)
+    sig = triangle_stress(model, u)
+    return _to_nodes(model.mesh, model.geometry.tri_area, sig.reshape(-1, 4)).reshape(-1, 2, 2)
 
 
 def _to_nodes(mesh, area: np.ndarray, values: np.ndarray) -> np.ndarray:
