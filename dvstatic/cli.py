@@ -376,7 +376,10 @@ def _print_summary(sc, d: dict, written: list[Path]) -> None:
     rows = [
         ("scene", f"{sc.path}" + (f"  ({sc.data['title']})" if sc.data["title"] else "")),
         *([("overrides", ", ".join(d["scene"]["overrides"]))] if d["scene"]["overrides"] else []),
-        ("mesh", f"{m['nodes']} nodes, {m['bonds']} bonds, sigma_L = {m['sigma_L']:.4f}"),
+        (
+            "mesh",
+            f"{m['nodes']} nodes ({m['kind']}), {m['bonds']} bonds, sigma_L = {m['sigma_L']:.4f}",
+        ),
         ("model", _model_line(md)),
         ("solver", _solver_line(s)),
         ("max |u|", f"{d['max_displacement']:.6e}"),

@@ -123,7 +123,9 @@ def check_values(solution, checks, stress: str | None = None, fe=None) -> list[d
     solution : Solution
     checks : sequence of dict
         Each with ``name``, ``at`` (point, length), ``quantity`` (``ux``, ``uy``,
-        ``|u|``, ``sxx``, ``syy`` or ``sxy``) and ``reference``; optional ``source``.
+        ``|u|``, ``sxx``, ``syy`` or ``sxy``) and ``reference``; optional ``source``
+        and, for ``ux``/``uy``, ``relative_to`` (a point: the value at ``at`` minus the
+        value there, which no rigid motion changes).
         A point outside the mesh but within half the local spacing of a node (a point on a
         curved boundary) takes that node's value.
     stress : str, optional
@@ -142,14 +144,19 @@ def check_values(solution, checks, stress: str | None = None, fe=None) -> list[d
     out = []
     for c in checks:
         _check_check(c)
-        point = np.asarray(c["at"], dtype=float).reshape(1, 2)
-        value = float(
-            _value_at(mesh, nodal_field(solution, c["quantity"], stress), point, c["name"])
-        )
-        rec = dict(c, at=point[0].tolist(), value=value)
+        points = [np.asarray(c["at"], dtype=float).reshape(1, 2)]
+        if c.get("relative_to") is not None:
+            points.append(np.asarray(c["relative_to"], dtype=float).reshape(1, 2))
+        field = nodal_field(solution, c["quantity"], stress)
+        values = [float(_value_at(mesh, field, p, c["name"])) for p in points]
+        value = values[0] - (values[1] if len(values) > 1 else 0.0)
+        rec = dict(c, at=points[0][0].tolist(), value=value)
+        if len(points) > 1:
+            rec["relative_to"] = points[1][0].tolist()
         rec["difference"] = _difference(value, c["reference"])
         if fe is not None:
-            rec["fe_value"] = _fe_value(fe, c["quantity"], snap_point(mesh, point), mesh)
+            fv = [_fe_value(fe, c["quantity"], snap_point(mesh, p), mesh) for p in points]
+            rec["fe_value"] = fv[0] - (fv[1] if len(fv) > 1 else 0.0)
             rec["fe_difference"] = _difference(rec["fe_value"], c["reference"])
         out.append(rec)
     return out
@@ -166,6 +173,11 @@ def _check_check(c) -> None:
     missing = [k for k in ("name", "at", "quantity", "reference") if k not in c]
     if missing:
         raise InputError(f"check {c.get('name', c)!r}: missing {', '.join(missing)}", "checks")
+    if c.get("relative_to") is not None and c["quantity"] not in ("ux", "uy"):
+        raise InputError(
+            f"check {c['name']!r}: relative_to applies to ux and uy only, not {c['quantity']!r}",
+            "relative_to",
+        )
     if c["quantity"] not in CHECK_QUANTITIES:
         raise InputError(
             f"check {c['name']!r}: unknown quantity {c['quantity']!r}; accepted: "
@@ -216,6 +228,7 @@ def _mesh_summary(mesh: Mesh) -> dict:
         "area": mesh.area,
         "mean_bond_length": mesh.h,
         "sigma_L": mesh.edge_length_spread(),
+        "kind": mesh.sampling.kind if mesh.sampling is not None else "imported",
         "parts": sorted(mesh.parts),
     }
 

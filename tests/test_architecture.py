@@ -296,6 +296,7 @@ OLD_NAMES = {
         "SQRT3_2",
     ],
     "dvstatic.periodic": ["periodic_square", "periodic_delaunay"],
+    "dvstatic.lattice.stress": ["node_stress", "strain_stress", "bond_state", "check_model"],
     "dvstatic.ordering": ["nested_dissection", "mesh_dof_order"],
     "dvstatic.kinematics": ["circumcentres", "barycentric", "edge_frames", "half_sides"],
     "dvstatic.geometry": ["Geometry", "of", "is_cached"],

@@ -137,7 +137,7 @@ CASES = [
         "fix at far from every node",
         lambda: dv.solve(dv.DV(_lattice(), 1e5, 0.2), [dv.Fix(at=(5.0, 5.0))], []),
         ValueError,
-        "no node near",
+        "no node at",
     ),
     (
         "traction at a point",

@@ -31,7 +31,7 @@ def test_supports_and_point_loads_at_a_coordinate(plate):
     np.testing.assert_allclose(plate.u[corner], 0.0, atol=1e-15)
     sol = dv.solve(plate.model, [dv.Fix("left")], [dv.PointLoad(at=(2.0, 0.5), value=(0.0, -1.0))])
     assert sol.reactions[:, 1].sum() == pytest.approx(1.0, rel=1e-9)
-    with pytest.raises(dv.InputError, match="no node near"):
+    with pytest.raises(dv.InputError, match="no node at"):
         dv.solve(plate.model, [dv.Fix(at=(5.0, 5.0))], [])
     with pytest.raises(TypeError, match="not both"):
         dv.Fix("left", at=(0.0, 0.0))

@@ -134,21 +134,30 @@ class Measure:
         return np.einsum("ei,ei->e", self.n, u[self.bonds[:, 1]] - u[self.bonds[:, 0]])
 
 
-def _uniform_response(model, length, area):
+def _uniform_response(model, length, area, dofs=None):
     """Tensions (3 x (n_bonds,)) and patch stresses (3 x (stress, covered)) of ``model``
-    under the unit uniform stresses xx, yy, xy applied as boundary tractions."""
+    under the unit uniform stresses xx, yy, xy: boundary tractions, and at the problem's
+    prescribed ``dofs`` the uniform state's displacement (so that a bond at a support
+    or a grip answers as it does in the problem: the stress at a support is the
+    stress); without ``dofs``, three pinned dofs."""
     from ..lattice.damage import split
 
     mesh = model.mesh
     sp_ = split(model)
     w, g = sp_.factors(np.ones(mesh.n_bonds))
     x = mesh.points
-    p1 = int(np.argmax(np.hypot(*(x - x[0]).T)))
-    dd = x[p1] - x[0]
-    dofs = np.array(sorted([0, 1, 2 * p1 + (1 if abs(dd[0]) >= abs(dd[1]) else 0)]))
+    if dofs is None:
+        p1 = int(np.argmax(np.hypot(*(x - x[0]).T)))
+        dd = x[p1] - x[0]
+        dofs = np.array(sorted([0, 1, 2 * p1 + (1 if abs(dd[0]) >= abs(dd[1]) else 0)]))
+        affine = [np.zeros(3)] * 3
+    else:
+        E, nu = model.material.in_plane
+        affine = [(x @ strain.T).reshape(-1)[dofs] for strain in _unit_strains(E, nu)]
     system = ConstrainedSystem(sp_.stiffness(mesh, w, g), dofs)
     engine = DirectSolver(system.A, order=mesh_dof_order(mesh))
-    us = [engine.apply(system.rhs(f, np.zeros(3))) for f in uniform_stress_loads(mesh, model.t)]
+    loads = uniform_stress_loads(mesh, model.t)
+    us = [engine.apply(system.rhs(f, v)) for f, v in zip(loads, affine, strict=True)]
     forces = [sp_.forces(u, w, g) for u in us]
     tens = [sp_.tension(u, w, g, f) for u, f in zip(us, forces, strict=True)]
     patches = [
@@ -157,7 +166,16 @@ def _uniform_response(model, length, area):
     return tens, patches
 
 
-def _responses(model, measure):
+def _unit_strains(E: float, nu: float) -> list[np.ndarray]:
+    """The strains (2, 2) of the unit stresses xx, yy, xy under the in-plane law."""
+    return [
+        np.array([[1.0, 0.0], [0.0, -nu]]) / E,
+        np.array([[-nu, 0.0], [0.0, 1.0]]) / E,
+        np.array([[0.0, 1.0 + nu], [1.0 + nu, 0.0]]) / E,
+    ]
+
+
+def _responses(model, measure, dofs=None):
     """The uniform-stress response of every bond. With several materials a uniform
     traction does not give a uniform stress, so each material's bonds take the response
     of the mesh made entirely of that material (a bond between materials takes the one
@@ -165,7 +183,7 @@ def _responses(model, measure):
     import dataclasses
 
     if len(model.all_materials) == 1:
-        return _uniform_response(model, measure.length, measure.area)
+        return _uniform_response(model, measure.length, measure.area, dofs)
     from .pieces import bond_triangles
 
     mat = model.material_of_triangle[bond_triangles(model.mesh)[:, 0]]
@@ -178,7 +196,7 @@ def _responses(model, measure):
         if not sel.any():
             continue
         alone = dataclasses.replace(model, E=material.E, nu=material.nu, materials=None)
-        t_k, p_k = _uniform_response(alone, measure.length, measure.area)
+        t_k, p_k = _uniform_response(alone, measure.length, measure.area, dofs)
         for c in range(3):
             tens[c][sel] = t_k[c][sel]
             patches[c][0][sel] = p_k[c][0][sel]
@@ -186,12 +204,13 @@ def _responses(model, measure):
     return tens, patches
 
 
-def strengths(model, measure, ft, weibull, timings):
+def strengths(model, measure, ft, weibull, timings, dofs=None):
     """First-crack strength of every bond in the units of the criterion, and its
-    tension-based strength (see :mod:`dvstatic.crack.strength`)."""
+    tension-based strength (see :mod:`dvstatic.crack.strength`); ``dofs``: the
+    problem's prescribed dofs (the responses hold them at the uniform state)."""
     t0 = time.perf_counter()
     mesh = model.mesh
-    tens, patches = _responses(model, measure)
+    tens, patches = _responses(model, measure, dofs)
     measure.set_response(np.stack(tens, axis=1), patches)
     factors = None
     if weibull is not None:

@@ -202,7 +202,7 @@ def fracture(
     dofs, values, f, control, ref = _reference(model, supports, loads)
     sp_ = _split(model)
     measure = Measure(model, sp_, criterion)
-    s0, s_tension = strengths(model, measure, ft, weibull, timings)
+    s0, s_tension = strengths(model, measure, ft, weibull, timings, dofs)
     energy = None if gf is None else _energies(model, gf, s_tension)
     _warn_rows(model.mesh)
     return _run(

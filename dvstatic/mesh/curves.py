@@ -59,8 +59,16 @@ class Curve(ABC):
 
     def spaced(self, h: float) -> np.ndarray:
         """Points at spacing about ``h`` from the start, the end excluded, (n, 2)."""
-        n = max(1, int(round(self.length / h)))
+        n = self.count(self.length / h)
         return self.point(self._arclength_params(np.arange(n) / n))
+
+    def count(self, steps: float) -> int:
+        """Nodes of a curve ``steps`` spacings long: a closed curve gets a multiple of
+        four (at least 4), so that the ends of its axes (of a full circle: the points
+        at 0, 90, 180 and 270 degrees) are nodes, where symmetry supports go."""
+        if getattr(self, "closed", False):
+            return 4 * max(1, int(round(steps / 4)))
+        return max(1, int(round(steps)))
 
     def _arclength_params(self, frac: np.ndarray) -> np.ndarray:
         """Curve parameters at fractions ``frac`` of the arc length."""

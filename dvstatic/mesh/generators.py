@@ -55,6 +55,8 @@ log = logging.getLogger(__name__)
 
 #: Mesh kinds understood by the generators.
 KINDS = ("lattice", "jittered", "random", "cvt")
+#: the kind of a mesh with a uniform spacing when none is given (graded meshes: "cvt")
+DEFAULT_KIND = "jittered"
 
 
 #: relative jitter of kind "jittered": irregular (sigma_L about 0.1) yet well-shaped
@@ -69,10 +71,11 @@ def rectangle(
     width: float = 1.0,
     height: float = 1.0,
     h: float = 0.1,
-    kind: str = "jittered",
+    kind: str | None = None,
     jitter: float = DEFAULT_JITTER,
     seed: int | None = 0,
     regions=(),
+    holes=(),
 ) -> Mesh:
     """Triangulated rectangle ``[0, width] x [0, height]``.
 
@@ -82,9 +85,11 @@ def rectangle(
         Rectangle size (length units), > 0.
     h : float or callable
         Target node spacing, 0 < h <= min(width, height); or a size field ``h(x) ->
-        (m,)`` for points ``x`` (m, 2): a graded CVT mesh whose spacing follows it
-        (:mod:`dvstatic.mesh.graded`; ``kind`` "lattice"/"jittered" become "cvt").
-    kind : {"lattice", "jittered", "random", "cvt"}
+        (m,)`` for points ``x`` (m, 2): a graded mesh whose spacing follows it
+        (:mod:`dvstatic.mesh.graded`).
+    kind : {"lattice", "jittered", "random", "cvt"}, optional
+        Default ``"jittered"``, and ``"cvt"`` for a graded mesh (a size field), which
+        can be ``"cvt"`` or ``"random"`` only (the rows of a lattice cannot grade).
         ``lattice``: regular triangular lattice (rows ``h sqrt(3)/2`` apart, exact
         equilateral triangles when the size fits); ``jittered``: lattice nodes shifted
         by up to ``jitter * h``, the shift tapering off within about one spacing of the
@@ -101,6 +106,8 @@ def rectangle(
         Named regions inside the rectangle (``dv.domain.Circle(c, r, name="inclusion")``,
         ``dv.domain.Polygon(v, name="layer")``): the triangles conform to their
         boundaries and ``mesh.regions`` lists their triangles.
+    holes : sequence of Polygon, Circle or Path
+        Holes (each gives its name to its boundary part), as for :func:`polygon`.
 
     Returns
     -------
@@ -110,10 +117,11 @@ def rectangle(
     """
     width = check_positive("width", width)
     height = check_positive("height", height)
-    if callable(h):
+    if callable(h) or holes:
         domain = rectangle_domain(width, height)
-        return generate(Domain(domain.outer, (), tuple(regions)), h, kind, jitter, seed)
+        return generate(Domain(domain.outer, tuple(holes), tuple(regions)), h, kind, jitter, seed)
     h = check_positive("h", h)
+    kind = DEFAULT_KIND if kind is None else kind
     if h > min(width, height):
         raise InputError(
             f"h = {h} is larger than the domain (min(width, height) = {min(width, height)}); "
@@ -139,7 +147,7 @@ def rectangle(
 def generate(
     domain: Domain,
     h: float,
-    kind: str = "jittered",
+    kind: str | None = None,
     jitter: float = DEFAULT_JITTER,
     seed: int | None = 0,
 ) -> Mesh:
@@ -151,8 +159,8 @@ def generate(
     h : float or callable
         Target node spacing, 0 < h <= the smallest extent of the domain; or a size
         field ``h(x) -> (m,)`` (see :func:`rectangle`).
-    kind : {"lattice", "jittered", "random", "cvt"}
-        As for :func:`rectangle`.
+    kind : {"lattice", "jittered", "random", "cvt"}, optional
+        As for :func:`rectangle` (default ``"jittered"``, ``"cvt"`` for a size field).
     jitter : float
         Relative jitter for ``kind="jittered"``, in [0, 0.5) (default 0.15: sigma_L about
         0.1, no obtuse interior triangle).
@@ -167,7 +175,8 @@ def generate(
         raise TypeError(f"domain must be a dvstatic Domain, got {type(domain).__name__}")
     h = check_h(h, domain)
     if isinstance(h, SizeField):
-        return _graded(domain, h, kind, seed)
+        return _graded(domain, h, "cvt" if kind is None else kind, seed)
+    kind = DEFAULT_KIND if kind is None else kind
     lo, hi = domain.bbox
     if h > float(np.min(hi - lo)):
         raise InputError(
@@ -189,8 +198,11 @@ def _graded(domain: Domain, h: SizeField, kind: str, seed) -> Mesh:
     (``kind="random"``: the random points only)."""
     kind, _, rng = check_sampling(kind, 0.0, seed)
     if kind in ROW_KINDS:
-        log.info("a size field makes a CVT mesh (kind %r ignored)", kind)
-        kind = "cvt"
+        raise InputError(
+            f"a graded mesh (h as a size field) cannot be of kind {kind!r}: the rows of a "
+            "lattice do not grade; use kind='cvt' (the default for graded meshes) or 'random'",
+            "kind",
+        )
     bnd, seg_a, seg_b = _loop_points(domain.loops, h)
     inner = density_points(domain, h, rng, lambda p: _distance_to_boundary(domain, p))
     inner = _gabriel(inner, seg_a, seg_b)
@@ -323,7 +335,7 @@ def _distance_to_domain_boundary(domain: Domain, p: np.ndarray) -> np.ndarray:
 def polygon(
     vertices,
     h: float,
-    kind: str = "jittered",
+    kind: str | None = None,
     jitter: float = DEFAULT_JITTER,
     seed: int | None = 0,
     names=None,
@@ -362,7 +374,7 @@ def disc(
     radius: float = 1.0,
     h: float = 0.1,
     center=(0.0, 0.0),
-    kind: str = "jittered",
+    kind: str | None = None,
     jitter: float = DEFAULT_JITTER,
     seed: int | None = 0,
     name: str = "boundary",
@@ -447,7 +459,7 @@ def lloyd(domain: Domain, points: np.ndarray, h, iterations: int = CVT_ITERATION
     points : ndarray, shape (N, 2)
     h : float or SizeField
         Spacing (sets the tolerance for "on the boundary"); a size field weights the
-        centroids by the density ``1 / h^2``.
+        centroids by ``h^-4`` (cells of a 2-D CVT scale as the density^(-1/4)).
     iterations : int
 
     Returns
@@ -456,7 +468,7 @@ def lloyd(domain: Domain, points: np.ndarray, h, iterations: int = CVT_ITERATION
     """
     p = np.array(points, dtype=float)
     hmin = min_h(h)
-    density = (lambda x: (hmin / h(x)) ** 2) if isinstance(h, SizeField) else None
+    density = (lambda x: (hmin / h(x)) ** 4) if isinstance(h, SizeField) else None
     on_bnd = _distance_to_boundary(domain, p) <= 1e-9 * hmin
     movable = np.flatnonzero(~on_bnd)
     for _ in range(iterations):

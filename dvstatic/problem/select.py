@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -13,11 +14,14 @@ from ..mesh import Mesh
 __all__ = ["At", "as_list", "nearest_node", "select_nodes", "select_edges", "where_ok", "label"]
 
 
+log = logging.getLogger(__name__)
+
+
 @dataclass(frozen=True)
 class At:
     """Selects the mesh node nearest to the point ``(x, y)`` (length); it must lie
-    within the local spacing (the mean length of its bonds) of the point. ``Fix(at=(x, y))`` and
-    ``PointLoad(at=(x, y), value=...)`` build one."""
+    within half the local spacing (the mean length of its bonds) of the point.
+    ``Fix(at=(x, y))`` and ``PointLoad(at=(x, y), value=...)`` build one."""
 
     x: float
     y: float
@@ -31,10 +35,17 @@ class At:
                 raise InputError(f"At.{name} must be finite, got {v}", "at")
 
 
-def nearest_node(mesh: Mesh, point) -> int:
+#: how far (in local spacings) a support's ``at=`` may be from the node it selects
+SNAP_TOLERANCE = 0.5
+#: the same for a point load (a force between two nodes goes to the nearer one)
+LOAD_SNAP_TOLERANCE = 1.0
+
+
+def nearest_node(mesh: Mesh, point, tolerance: float = SNAP_TOLERANCE) -> int:
     """Index of the node nearest to ``point``; :class:`InputError` if it is farther
-    than the local spacing (the mean length of that node's bonds: a point between two
-    boundary nodes of a coarse part of a graded mesh is still found)."""
+    than ``tolerance`` local spacings (the mean length of that node's bonds; default
+    half a spacing). A node more than a tenth of the spacing away is reported (a
+    warning): a support moved off a symmetry line adds a rigid motion."""
     from ..mesh.locate import local_spacing
 
     p = np.asarray(point, dtype=float).reshape(2)
@@ -43,11 +54,21 @@ def nearest_node(mesh: Mesh, point) -> int:
     d = np.hypot(*(mesh.points - p).T)
     i = int(np.argmin(d))
     h = local_spacing(mesh, i)
-    if d[i] > h:
+    if d[i] > tolerance * h:
         raise InputError(
-            f"no node near {p.tolist()}: the nearest, {mesh.points[i].tolist()}, is "
-            f"{d[i]:.3g} away (more than the local spacing, {h:.3g})",
+            f"no node at {p.tolist()}: the nearest, {mesh.points[i].tolist()}, is "
+            f"{d[i]:.3g} away, more than {tolerance:g} x the local spacing ({h:.3g}); put "
+            "a node there (a mesh whose boundary nodes include it) or choose a node",
             "at",
+        )
+    if d[i] > 0.1 * h:
+        log.warning(
+            "at=%s selects node %d at %s, %.3g away (%.0f %% of the local spacing)",
+            p.tolist(),
+            i,
+            mesh.points[i].tolist(),
+            d[i],
+            100 * d[i] / h,
         )
     return i
 
@@ -87,7 +108,8 @@ def select_nodes(mesh: Mesh, where, what: str) -> np.ndarray:
     if isinstance(where, str):
         return mesh.part_nodes(where)
     if isinstance(where, At):
-        return np.array([nearest_node(mesh, (where.x, where.y))])
+        tol = LOAD_SNAP_TOLERANCE if what == "PointLoad" else SNAP_TOLERANCE
+        return np.array([nearest_node(mesh, (where.x, where.y), tol)])
     arr = np.asarray(where)
     if arr.size == 0:
         raise InputError(f"{what}: the node selection is empty", "where")

@@ -15,6 +15,7 @@ from ..mesh.domain import Circle, Domain, Polygon, rectangle_domain
 from ..mesh.graded import size_near
 from ..mesh.locate import snap_point
 from ..problem import BodyForce, Fix, PointLoad, Pressure, Traction, nearest_node
+from ..problem.select import LOAD_SNAP_TOLERANCE, SNAP_TOLERANCE
 from .schema import SOLVER_KEYS, SceneError
 
 __all__ = ["Scene"]
@@ -41,7 +42,8 @@ class Scene:
             return self._read_mesh(m["path"])
         holes = [self._loop(f"mesh.holes[{i}]", h) for i, h in enumerate(m["holes"])]
         regions = [self._loop(f"mesh.regions[{i}]", r) for i, r in enumerate(m["regions"])]
-        common = {"kind": m["kind"], "jitter": m["jitter"], "seed": m["seed"]}
+        kind = None if m["kind"] == "auto" else m["kind"]
+        common = {"kind": kind, "jitter": m["jitter"], "seed": m["seed"]}
         try:
             domain = Domain(self._outer(m), tuple(holes), tuple(regions))
             if m["refine_near"]:
@@ -117,10 +119,10 @@ class Scene:
         except InputError as exc:
             raise self._err(_MODEL_KEYS.get(exc.param, "material"), exc) from None
 
-    def _nodes(self, mesh, item: dict, key: str):
+    def _nodes(self, mesh, item: dict, key: str, tolerance: float = SNAP_TOLERANCE):
         if item.get("at") is not None:
             try:
-                return np.array([nearest_node(mesh, item["at"])])
+                return np.array([nearest_node(mesh, item["at"], tolerance)])
             except InputError as exc:
                 raise SceneError(self.path, f"{key}.at", str(exc)) from None
         where = item["where"]
@@ -168,7 +170,8 @@ class Scene:
                     Pressure(self._nodes(mesh, ld, key), _pressure(ld), follower=ld["follower"])
                 )
             else:
-                out.append(PointLoad(self._nodes(mesh, ld, key), tuple(ld["value"])))
+                nodes = self._nodes(mesh, ld, key, LOAD_SNAP_TOLERANCE)
+                out.append(PointLoad(nodes, tuple(ld["value"])))
         return out
 
     def check_outputs(self, mesh) -> None:

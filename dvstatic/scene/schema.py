@@ -80,9 +80,10 @@ SCHEMA: dict[str, F] = {
             "h": F("number", "node spacing (length); required except for type = file"),
             "kind": F(
                 "string",
-                "interior points",
-                default="jittered",
-                choices=("lattice", "jittered", "random", "cvt"),
+                "interior points: auto is jittered, and cvt for a graded mesh (refine_near), "
+                "which can be cvt or random only",
+                default="auto",
+                choices=("auto", "lattice", "jittered", "random", "cvt"),
             ),
             "jitter": F(
                 "number", "relative jitter of kind = jittered, in [0, 0.5)", default=DEFAULT_JITTER
@@ -372,6 +373,11 @@ SCHEMA: dict[str, F] = {
                         "displacement or stress component (stress: output.stress recovery)",
                         required=True,
                         choices=CHECK_QUANTITIES,
+                    ),
+                    "relative_to": F(
+                        "point",
+                        "ux or uy only: the value at `at` minus the value here (length), a "
+                        "closure or a stretch that no rigid motion changes",
                     ),
                     "reference": F("number", "the value to compare with", required=True),
                     "source": F("string", "where the reference comes from", default=""),
