@@ -16,22 +16,30 @@ SXX = np.array([[1.0, 0.0], [0.0, 0.0]])
 
 def _uniform(case: str):
     if case == "uniaxial":
-        return [dv.Fix("left", x=0.0), dv.Fix(at=(0.0, 0.0), y=0.0)], [
-            dv.Traction("right", (1.0, 0.0))
-        ], SXX
+        return (
+            [dv.Fix("left", x=0.0), dv.Fix(at=(0.0, 0.0), y=0.0)],
+            [dv.Traction("right", (1.0, 0.0))],
+            SXX,
+        )
     if case == "biaxial":
-        return [dv.Fix("left", x=0.0), dv.Fix("bottom", y=0.0)], [
-            dv.Traction("right", (1.0, 0.0)),
-            dv.Traction("top", (0.0, 1.0)),
-        ], np.eye(2)
+        return (
+            [dv.Fix("left", x=0.0), dv.Fix("bottom", y=0.0)],
+            [
+                dv.Traction("right", (1.0, 0.0)),
+                dv.Traction("top", (0.0, 1.0)),
+            ],
+            np.eye(2),
+        )
     loads = [
         dv.Traction("right", (0.0, 1.0)),
         dv.Traction("left", (0.0, -1.0)),
         dv.Traction("top", (1.0, 0.0)),
         dv.Traction("bottom", (-1.0, 0.0)),
     ]
-    return [dv.Fix(at=(0.0, 0.0)), dv.Fix(at=(2.0, 0.0), y=0.0)], loads, np.array(
-        [[0.0, 1.0], [1.0, 0.0]]
+    return (
+        [dv.Fix(at=(0.0, 0.0)), dv.Fix(at=(2.0, 0.0), y=0.0)],
+        loads,
+        np.array([[0.0, 1.0], [1.0, 0.0]]),
     )
 
 
@@ -53,7 +61,11 @@ def _ring(h: float):
 
 
 def _ring_supports():
-    return [dv.Fix(at=(1.0, 0.0), y=0.0), dv.Fix(at=(-1.0, 0.0), y=0.0), dv.Fix(at=(0.0, 1.0), x=0.0)]
+    return [
+        dv.Fix(at=(1.0, 0.0), y=0.0),
+        dv.Fix(at=(-1.0, 0.0), y=0.0),
+        dv.Fix(at=(0.0, 1.0), x=0.0),
+    ]
 
 
 def test_a_load_written_edge_by_edge_gives_the_same_stress():
