@@ -101,9 +101,9 @@ def _run(args: argparse.Namespace) -> int:
         raise
     if sol.u is None:  # an MPI rank other than 0 of a solver="petsc" run: rank 0 writes
         return 0
-    fe = _fe_reference(sc, mesh, supports, loads, say)
+    fe, fe_failed = _fe_reference(sc, mesh, supports, loads, say, sol.info.nonlinear)
     say("recovering stresses and writing the outputs")
-    data, written = _write_outputs(sc, sol, fe, folder, args, t0)
+    data, written = _write_outputs(sc, sol, fe, folder, args, t0, fe_failed)
     _print_summary(sc, data, written)
     if not sol.info.converged:
         print(
@@ -252,14 +252,31 @@ class _Stages:
             print(f"[{time.perf_counter() - self.t0:6.1f} s] {text} ...", file=sys.stderr)
 
 
-def _fe_reference(sc, mesh, supports, loads, say):
-    """The FE solution of ``[output] fe_compare`` (None if not asked for)."""
+def _fe_reference(sc, mesh, supports, loads, say, nonlinear: bool):
+    """The FE solution of ``[output] fe_compare`` and why there is none: (None, "") if
+    not asked for; (None, reason) where it failed or does not apply (a nonlinear
+    solution against a linear reference). A failed reference never costs the lattice
+    result: that is written, and the reason said."""
+    o = sc.data["output"]
+    if not o["fe_compare"]:
+        return None, ""
+    if nonlinear:
+        why = "the FE reference is linear, the solution nonlinear: not compared"
+        print(f"note: {why}", file=sys.stderr)
+        return None, why
+    say(f"FE reference (P{o['fe_order']}, {o['fe_refine']} refinement(s))")
+    try:
+        return _fe_solve(sc, mesh, supports, loads), ""
+    except (SolverError, InputError) as exc:
+        why = f"the FE reference failed ({exc}); the lattice results are written without it"
+        print(f"warning: {why}", file=sys.stderr)
+        return None, why
+
+
+def _fe_solve(sc, mesh, supports, loads):
     from . import fem
 
     o, mat = sc.data["output"], sc.data["material"]
-    if not o["fe_compare"]:
-        return None
-    say(f"FE reference (P{o['fe_order']}, {o['fe_refine']} refinement(s))")
     return fem.solve(
         mesh,
         mat["E"],
@@ -274,7 +291,9 @@ def _fe_reference(sc, mesh, supports, loads, say):
     )
 
 
-def _write_outputs(sc, sol, fe, folder, args, t0: float) -> tuple[dict, list[Path]]:
+def _write_outputs(
+    sc, sol, fe, folder, args, t0: float, fe_failed: str = ""
+) -> tuple[dict, list[Path]]:
     """Write VTU, PNG and JSON into the output folder's staging area and move them onto
     their names only when all are complete: an interrupted or failed run leaves
     earlier results as they were. Returns the summary data and the paths written."""
@@ -308,6 +327,8 @@ def _write_outputs(sc, sol, fe, folder, args, t0: float) -> tuple[dict, list[Pat
             checks=o["checks"],
         )
         data["scene"] = _scene_record(sc, args)
+        if fe_failed:
+            data["fe_reference"] = fe_failed
         if o["png"]:
             data["picture"] = {"file": png.name, "field": o["field"], "magnification": scale}
         data["dvstatic_version"] = __version__
@@ -404,8 +425,9 @@ def _print_summary(sc, d: dict, written: list[Path]) -> None:
         rows.append(
             (
                 f"FE (P{f['order']}{refined})",
-                f"{f['n_dof']} dof: relative L2 difference {f['rel_l2_difference']:.3%}, "
-                f"max {f['rel_max_difference']:.3%}",
+                f"{f['n_dof']} dof: relative L2 difference {f['rel_l2_difference']:.3%} "
+                f"({f['rel_l2_difference_without_rigid_motion']:.3%} without the rigid "
+                f"motion), max {f['rel_max_difference']:.3%}",
             )
         )
     if "probes" in d:
@@ -430,13 +452,23 @@ def _print_summary(sc, d: dict, written: list[Path]) -> None:
                 )
     for name, rec in d.get("part_stress", {}).items():
         lat, lv = rec["lattice"], rec["lattice_virial"]
+
+        def at(key, lat=lat):
+            return "({:.3g}, {:.3g})".format(*lat[f"{key}_at"])
+
         txt = (
-            f"max sxx {lat['max_sxx']:.4g} ({lv['max_sxx']:.4g} virial), "
-            f"max syy {lat['max_syy']:.4g}, max principal {lat['max_principal']:.4g}"
+            f"sxx {lat['min_sxx']:.4g} at {at('min_sxx')} to {lat['max_sxx']:.4g} at "
+            f"{at('max_sxx')}, syy {lat['min_syy']:.4g} to {lat['max_syy']:.4g}, principal "
+            f"{lat['min_min_principal']:.4g} to {lat['max_principal']:.4g}"
+            f" (virial sxx to {lv['max_sxx']:.4g})"
         )
         if "fe" in rec:
             fe_ = rec["fe"]
-            txt += f" (FE {fe_['max_sxx']:.4g}, {fe_['max_syy']:.4g}, {fe_['max_principal']:.4g})"
+            txt += (
+                f"; FE sxx {fe_['min_sxx']:.4g} to {fe_['max_sxx']:.4g}, syy {fe_['min_syy']:.4g}"
+                f" to {fe_['max_syy']:.4g}, principal {fe_['min_min_principal']:.4g} to "
+                f"{fe_['max_principal']:.4g}"
+            )
         rows.append((f"stress on {name}", txt))
     rows += [(f"check: {c['name']}", _check_text(c)) for c in d.get("checks", [])]
     rows.append(("files", ", ".join(str(w) for w in written) or "none"))
@@ -487,6 +519,7 @@ def _validate(args: argparse.Namespace) -> int:
     scripts = sorted(d.glob("fig[0-9][0-9]_*.py")) + [
         d / "elastica.py",
         d / "convergence.py",
+        d / "stress.py",
         d / "fracture.py",
     ]
     if args.only:

@@ -14,12 +14,17 @@ entry as ``(1-nu)/2``, i.e. ``C1212``, half the Mandel entry.)
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass
 
 import numpy as np
 
 from ._checks import check_choice, check_positive, check_real
 from .errors import InputError
+
+log = logging.getLogger(__name__)
+#: values of nu >= 0.5 warned about (once each)
+_WARNED: set[float] = set()
 
 __all__ = [
     "PLANES",
@@ -59,6 +64,13 @@ class Elastic:
         check_choice("plane", self.plane, PLANES)
         if self.plane == "stress":
             nu = check_poisson(self.nu)
+            if nu >= 0.5 and nu not in _WARNED:
+                _WARNED.add(nu)
+                log.warning(
+                    "nu = %g in plane stress: no isotropic 3-D material has nu >= 0.5 (its "
+                    "bulk modulus would be negative); a 2-D sheet law only",
+                    nu,
+                )
         else:
             nu = check_real("nu", self.nu)
             if not -1.0 < nu < 0.5:

@@ -334,7 +334,7 @@ def _part_stress(solution, stress: np.ndarray, names, fe) -> dict:
         nodes = mesh.part_nodes(name)
         rec = {
             "nodes": int(nodes.size),
-            "lattice": _stress_extremes(stress[nodes]),
+            "lattice": _stress_extremes(stress[nodes], mesh.points[nodes]),
             "lattice_virial": _stress_extremes(virial[nodes]),
         }
         if fe is not None:
@@ -345,6 +345,7 @@ def _part_stress(solution, stress: np.ndarray, names, fe) -> dict:
 
 def _fe_summary(solution, fe) -> dict:
     c = compare(solution, fe)
+    r = compare(solution, fe, rigid=True)
     return {
         "order": fe.order,
         "refine": fe.refine,
@@ -352,20 +353,28 @@ def _fe_summary(solution, fe) -> dict:
         "seconds": fe.info["seconds"],
         "rel_l2_difference": c.l2,
         "rel_max_difference": c.max,
+        # a body held at points floats on the lattice's fluctuations there: the rigid
+        # motion that moves it is no strain, and is taken out here
+        "rel_l2_difference_without_rigid_motion": r.l2,
+        "rigid_motion": r.rigid,
         "max_displacement": fe.max_displacement,
     }
 
 
-def _stress_extremes(s: np.ndarray) -> dict:
+def _stress_extremes(s: np.ndarray, points: np.ndarray | None = None) -> dict:
+    """Largest and smallest sxx, syy and principal stresses (and where, with
+    ``points``)."""
     sxx, syy, sxy = s[:, 0, 0], s[:, 1, 1], 0.5 * (s[:, 0, 1] + s[:, 1, 0])
-    p1 = 0.5 * (sxx + syy) + np.sqrt(0.25 * (sxx - syy) ** 2 + sxy**2)
-    return {
-        "max_sxx": float(sxx.max()),
-        "min_sxx": float(sxx.min()),
-        "max_syy": float(syy.max()),
-        "min_syy": float(syy.min()),
-        "max_principal": float(p1.max()),
-    }
+    r = np.sqrt(0.25 * (sxx - syy) ** 2 + sxy**2)
+    p1, p2 = 0.5 * (sxx + syy) + r, 0.5 * (sxx + syy) - r
+    out = {}
+    for name, v in (("sxx", sxx), ("syy", syy), ("principal", p1), ("min_principal", p2)):
+        for kind, k in (("max", int(np.argmax(v))), ("min", int(np.argmin(v)))):
+            key = f"{kind}_{name}" if name != "min_principal" else f"{kind}_{name}"
+            out[key] = float(v[k])
+            if points is not None:
+                out[f"{key}_at"] = points[k].tolist()
+    return out
 
 
 def fracture_checks(result, checks) -> list[dict]:

@@ -113,7 +113,7 @@ def test_calibration_source_follows_the_mesh():
     assert micro.details["source"] == "recipe" and micro.details["evaluations"] >= 2
     bare = dv.Mesh(mesh.points, mesh.triangles)
     assert bare.sampling is None
-    assert dv.RV(bare, E, 0.3).micro.details["source"] == "spread"
+    assert dv.RV(bare, E, 0.3).micro.details["source"] == "local spread"
 
 
 def test_unreachable_nu_is_refused_with_the_range():

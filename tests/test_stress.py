@@ -215,3 +215,37 @@ def test_full_circles_have_nodes_on_their_axes():
     mesh = dv.mesh.disc(1.0, 0.13)
     for p in ((1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0)):
         assert np.min(np.hypot(*(mesh.points - p).T)) < 1e-12
+
+
+# ------------------------------------------------------------------ imported meshes
+def test_a_graded_mesh_without_recipe_is_calibrated_by_its_cells_not_its_grading():
+    """Issue 28: the global sigma_L of a graded mesh measures its grading (0.56 here)
+    and calibrated it as random points (k_n 9 % off); the local spread (every bond
+    over the mean bond length at its nodes) reads its CVT cells."""
+    tunnel = dv.domain.Circle((0, 0), 1.0, "tunnel")
+    domain = dv.domain.Domain(dv.domain.Circle((0, 0), 10.0, "boundary"), (tunnel,))
+    graded = dv.mesh.generate(domain, dv.mesh.size_near(domain, "tunnel", 0.05, 0.5, 3.0))
+    bare = dv.Mesh(graded.points, graded.triangles, parts=graded.parts)  # as if imported
+    assert graded.edge_length_spread() > 0.4
+    with_recipe = dv.DV(graded, E, NU)
+    imported = dv.DV(bare, E, NU)
+    assert imported.micro.details["source"] == "local spread"
+    assert imported.k_n == pytest.approx(with_recipe.k_n, rel=0.02)
+    assert imported.nu_m == pytest.approx(with_recipe.nu_m, abs=0.02)
+
+
+def test_a_mesh_that_mixes_micro_structures_is_warned_about(caplog):
+    from scipy.spatial import Delaunay
+
+    a = dv.mesh.rectangle(1, 1, 0.05, kind="lattice").points
+    b = dv.mesh.rectangle(1, 1, 0.05, kind="random", seed=3).points + [1.0, 0.0]
+    pts = np.unique(np.round(np.vstack([a, b]), 9), axis=0)
+    tri = Delaunay(pts).simplices
+    x = pts[tri]
+    area = (x[:, 1, 0] - x[:, 0, 0]) * (x[:, 2, 1] - x[:, 0, 1]) - (x[:, 1, 1] - x[:, 0, 1]) * (
+        x[:, 2, 0] - x[:, 0, 0]
+    )
+    mesh = dv.Mesh(pts, tri[np.abs(area) > 1e-12])
+    with caplog.at_level(logging.WARNING, logger="dvstatic.lattice.calibration.relaxed"):
+        dv.DV(mesh, E, NU)
+    assert "mixes micro-structures" in caplog.text

@@ -161,3 +161,13 @@ def test_fracture(out):
         assert row["near_diameter"] > 0.5
     assert d["cohesive"]["peak_N"] == pytest.approx(853, rel=0.02)
     assert d["speed"][0]["same_sequence"]
+
+
+@pytest.mark.slow
+def test_stress_quick(out):
+    _run("stress", out)
+    d = json.loads((out / "stress.json").read_text())
+    assert max(r["worst"] for r in d["uniform"]) < 1e-6
+    for row in d["lame"]:
+        assert row["hoop_rms"] < 0.08
+    assert all(abs(r["first_break_over_ft"] - 1) < 0.02 for r in d["tension"])

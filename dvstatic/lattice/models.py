@@ -27,7 +27,7 @@ import numpy as np
 
 from .._checks import as_displacement, check_choice, check_positive
 from .._env import launched_under_mpi
-from ..errors import InputError
+from ..errors import CalibrationError, InputError
 from ..material import Elastic
 from ..mesh import Mesh
 from . import calibration
@@ -218,7 +218,16 @@ class VoronoiModel:
     def _calibrate(self, material: Elastic) -> calibration.MicroParameters:
         E2, nu2 = material.in_plane
         if self.calibration == "relaxed":
-            return calibration.relaxed(self.kind, self.mesh, E2, nu2, self.bonds)
+            try:
+                return calibration.relaxed(self.kind, self.mesh, E2, nu2, self.bonds)
+            except CalibrationError as exc:
+                if material.plane == "stress":
+                    raise
+                raise CalibrationError(
+                    f"nu = {material.nu} in plane strain (in-plane nu* = nu / (1 - nu) = "
+                    f"{nu2:.4g}) cannot be calibrated: {exc}",
+                    "nu",
+                ) from None
         return calibration.paper(self.kind, self.mesh, self.geometry, E2, nu2, self.bond_weight)
 
     def set_micro(self, micro) -> None:

@@ -63,6 +63,9 @@ DEFAULT_KIND = "jittered"
 #: cells, no obtuse interior triangle (0.3 gives about 10 % of them, which soften DV)
 DEFAULT_JITTER = 0.15
 
+#: a generated mesh with fewer nodes is warned about
+COARSE_NODES = 50
+
 #: Lloyd iterations of kind "cvt"
 CVT_ITERATIONS = 30
 
@@ -243,6 +246,13 @@ def _triangulated(domain: Domain, pts: np.ndarray, h, sampling: Sampling) -> Mes
     pts, tri, parts, regions = domain.triangulate(pts, 1e-9 * min_h(h), segments=segments)
     mesh = Mesh(pts, tri, parts=parts, regions=regions, domain=domain, sampling=sampling)
     log.debug("generated %s mesh: %r", sampling, mesh)
+    if mesh.n_points < COARSE_NODES:
+        log.warning(
+            "the mesh has only %d nodes (h = %.3g): a lattice this coarse has errors of "
+            "tens of percent (its stresses average over 4 spacings); use a smaller h",
+            mesh.n_points,
+            min_h(h),
+        )
     return mesh
 
 

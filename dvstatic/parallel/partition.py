@@ -202,38 +202,15 @@ def micro_parameters(model, lay: Layout, allreduce) -> tuple:
     constants = [m.in_plane for m in model.all_materials]
     if model.calibration == "relaxed":
         # the recipe (or the table) is the same on every rank; without one, the
-        # sample matches the interior spread, summed over ranks
-        spread = None
-        if model.mesh.sampling is None or not model.mesh.sampling.reproducible:
-            spread = _interior_spread(model.mesh, lay, geom, own_b, allreduce)
+        # sample matches the local spread of the (replicated) mesh, the same everywhere
         return tuple(
-            calibration.relaxed(model.kind, model.mesh, E2, nu2, model.bonds, spread=spread)
+            calibration.relaxed(model.kind, model.mesh, E2, nu2, model.bonds)
             for E2, nu2 in constants
         )
     w = bond_weights(model.bonds, lay.patch)
     sums = calibration.moment_sums(model.kind, geom, w, own_b, owned_triangles(lay))
     mom = calibration.moments_from_sums(allreduce(sums), model.mesh.area)
     return tuple(calibration.paper_from_moments(model.kind, mom, E2, nu2) for E2, nu2 in constants)
-
-
-def _interior_spread(mesh: Mesh, lay: Layout, geom, own_b, allreduce) -> float:
-    """sigma_L of the interior bonds (all bonds if fewer than 30), summed over ranks."""
-    b = lay.patch.topology.bonds
-    bnd = np.zeros(mesh.n_points, dtype=bool)
-    bnd[mesh.boundary_nodes] = True
-    glob = lay.local_nodes[b]
-    inner = own_b & ~(bnd[glob[:, 0]] | bnd[glob[:, 1]])
-    ln = geom.length
-    s = allreduce(
-        np.array(
-            [inner.sum(), ln[inner].sum(), (ln[inner] ** 2).sum()]
-            + [own_b.sum(), ln[own_b].sum(), (ln[own_b] ** 2).sum()],
-            dtype=float,
-        )
-    )
-    c, s1, s2 = s[:3] if s[0] >= 30 else s[3:]
-    mean = s1 / c
-    return float(np.sqrt(max(s2 / c - mean**2, 0.0)) / mean)
 
 
 def owned_loads(mesh: Mesh, loads, lay: Layout, thickness: float = 1.0) -> np.ndarray:

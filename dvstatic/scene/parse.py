@@ -208,7 +208,9 @@ def _check_rules(path, d: dict) -> None:
         raise SceneError(path, "mesh.holes", "holes cannot be added to a mesh read from a file")
     _check_material(path, "material", d["material"], d["material"]["plane"])
     if d["material"]["thickness"] is not None and d["material"]["thickness"] <= 0:
-        raise SceneError(path, "material.thickness", "must be > 0")
+        raise SceneError(
+            path, "material.thickness", f"must be > 0, got {d['material']['thickness']}"
+        )
     seen = set()
     for i, mat in enumerate(d["materials"]):
         _check_material(path, f"materials[{i}]", mat, d["material"]["plane"])
@@ -247,6 +249,29 @@ def _check_rules(path, d: dict) -> None:
         raise SceneError(path, "output.fe_refine", f"must be in [0, 6], got {o['fe_refine']}")
     if o["scale"] is not None and o["scale"] <= 0:
         raise SceneError(path, "output.scale", f"must be > 0, got {o['scale']}")
+    if d["fracture"] is not None:
+        _check_fracture_outputs(path, d)
+
+
+def _check_fracture_outputs(path, d: dict) -> None:
+    """Keys a ``[fracture]`` run does not use are refused, not ignored."""
+    o = d["output"]
+    unused = {
+        "output.fe_compare": o["fe_compare"],
+        "output.probes": bool(o["probes"]),
+        "output.part_stress": bool(o["part_stress"]),
+        "output.checks": bool(o["checks"]),
+    }
+    for key, given in unused.items():
+        if given:
+            raise SceneError(
+                path, key, "not used by a [fracture] run (fracture.checks holds its key numbers)"
+            )
+    solver = d["solver"]
+    if solver.get("type", "auto") not in ("auto", "direct"):
+        raise SceneError(
+            path, "solver.type", "a [fracture] run solves directly (factorisation updates)"
+        )
 
 
 def _check_material(path, key: str, mat: dict, plane: str) -> None:

@@ -336,9 +336,9 @@ SCHEMA: dict[str, F] = {
             "stress": F(
                 "string",
                 "stress recovery of the picture, probes, checks and part stresses (the VTU "
-                "holds recovered and virial): recovered (patch fits with "
-                "the continuum law, equilibrated fits at boundaries: right at free and curved "
-                "edges), virial (the lattice's bond forces over each Voronoi cell) or strain "
+                "holds recovered and virial): recovered (a continuum field over 4 local "
+                "spacings, exact for uniform stress at every node: docs/theory.md 8.6), "
+                "virial (the lattice's bond forces over each Voronoi cell) or strain "
                 "(area-averaged lattice strain); nonlinear solves use virial",
                 default="recovered",
                 choices=("recovered", "virial", "strain"),
