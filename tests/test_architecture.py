@@ -55,6 +55,7 @@ LAYERS = {
     "dvstatic.plot": 6,
     "dvstatic.scene": 7,
     "dvstatic.cli": 7,
+    "dvstatic.console": 7,
     "dvstatic.__main__": 7,
 }
 FACADE = "dvstatic"  # the package's __init__: the top, matched exactly

@@ -202,7 +202,7 @@ def ring_rows(path: Path, label: str) -> list[dict]:
 
 def _rigid_free_l2(points, u, exact) -> float:
     """Relative L2 difference with the best rigid motion taken out."""
-    from dvstatic.fem import _without_rigid
+    from dvstatic.fem.compare import _without_rigid
 
     d, _ = _without_rigid(points, u - exact)
     return float(np.linalg.norm(d) / np.linalg.norm(exact))
