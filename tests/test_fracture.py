@@ -483,3 +483,55 @@ def test_meshes_with_lattice_rows_are_flagged_once(monkeypatch, caplog):
         for _ in range(2):
             dv.fracture(jittered, sup, loads, ft=FT, max_events=1)
     assert len(flagged()) == 1 and "kind='cvt'" in flagged()[0].getMessage()
+
+
+def test_a_balanced_pair_of_loads_counts_one_side():
+    """Two opposite strips, two opposite point loads and two grips moved apart by +-d/2
+    all report the force on one side (the platen force of a Brazilian test)."""
+    mesh, sup, strips, p_strip = disc_problem(0.1)
+    model = dv.DV(mesh, E=E, nu=NU)
+    e = dv.fracture(model, sup, strips, ft=FT, max_events=1).events[0]
+    assert e.load == pytest.approx(e.load_factor * p_strip, rel=1e-9)
+    points = [dv.PointLoad(at=(0, 1), value=(0, -2.0)), dv.PointLoad(at=(0, -1), value=(0, 2.0))]
+    res = dv.fracture(model, sup, points, ft=FT, max_events=1)
+    e = res.events[0]
+    assert e.load == pytest.approx(2.0 * e.load_factor, rel=1e-9)
+    u = res.u
+    top, bottom = (np.argmin(np.hypot(*(mesh.points - p).T)) for p in ((0, 1), (0, -1)))
+    approach = u[bottom, 1] - u[top, 1]
+    assert e.control_displacement == pytest.approx(approach, rel=1e-9)
+    d = 1e-4
+    grips = [dv.Fix(at=(0, 1), x=0, y=-d / 2), dv.Fix(at=(0, -1), x=0, y=d / 2), *sup[2:]]
+    res = dv.fracture(model, grips, ft=FT, max_events=1)
+    e = res.events[0]
+    assert e.control_displacement == pytest.approx(e.load_factor * d, rel=1e-12)
+    sol = dv.solve(model, grips)
+    lam = e.load_factor
+    one_side = 0.5 * (sol.reactions[bottom, 1] - sol.reactions[top, 1])  # their mean
+    assert e.load == pytest.approx(lam * one_side, rel=1e-6)
+
+
+def test_snapshots_span_the_run_and_keep_the_peak_and_the_last():
+    mesh = plate(0.1)
+    sup, loads = pulled()
+    res = dv.fracture(
+        dv.DV(mesh, E=E, nu=NU),
+        sup,
+        loads,
+        ft=FT,
+        gf=2e-3,
+        teeth=4,
+        snapshots=6,
+        max_events=5000,
+        stop_load_ratio=0.05,
+    )
+    n = len(res.events)
+    assert 40 < n < 5000  # the run stops long before max_events
+    kept = [s.event for s in res.snapshots]
+    assert kept == sorted(set(kept))
+    peak = max(range(n), key=lambda k: res.events[k].load)
+    assert peak in kept and n - 1 in kept
+    assert 4 <= len(kept) <= math.ceil(4 * 6 / 3) + 2
+    assert max(np.diff(kept)) <= 2 * n / 4  # spread over the run, not bunched at its start
+    last = res.snapshots[-1]
+    assert np.array_equal(last.u, res.u)

@@ -55,21 +55,50 @@ def _reference(model, supports, loads):
     loads = as_list(loads, "Traction, Pressure, BodyForce or PointLoad") if loads else []
     f = load_vector(mesh, loads, thickness=model.t) if loads else np.zeros(2 * mesh.n_points)
     if np.any(values):
-        return dofs, values, f, "displacement", float(np.max(np.abs(values)))
+        return dofs, values, f, "displacement", _displacement_measure(dofs, values)
     if not np.any(f):
         raise InputError(
             "nothing loads the body: give loads or a non-zero prescribed displacement "
             "(Fix(..., y=-1e-3)); they are scaled by the load factor",
             "loads",
         )
-    ref = 0.0
+    return dofs, values, f, "force", _load_measure(mesh, loads, model.t)
+
+
+def _displacement_measure(dofs, values) -> float:
+    """The control displacement per unit load factor: the largest spread of the
+    prescribed values of one component, zero included (a fixed side and a moved side:
+    the moved value; two sides moved apart by +-d/2: d)."""
+    spread = 0.0
+    for c in (0, 1):
+        v = np.append(values[dofs % 2 == c], 0.0)
+        spread = max(spread, float(v.max() - v.min()))
+    return spread
+
+
+def _load_measure(mesh, loads, thickness) -> float:
+    """The load per unit load factor: the resultant of one side.
+
+    A load object whose own resultant vanishes (a pressure in a hole) counts half its
+    total nodal force; loads whose resultants balance each other (two opposite point
+    loads or strips on a disc) count half the sum of their resultants, the force on one
+    side; otherwise the resultants add up (the supports react).
+    """
+    own, resultants = 0.0, []
     for load in loads:
-        fk = nodal_forces(mesh, [load], thickness=model.t).reshape(-1, 2)
-        resultant = float(np.hypot(*fk.sum(axis=0)))
+        fk = nodal_forces(mesh, [load], thickness=thickness).reshape(-1, 2)
+        r = fk.sum(axis=0)
         total = float(np.hypot(fk[:, 0], fk[:, 1]).sum())
-        # a self-balanced load (a pressure in a hole) counts half its total nodal force
-        ref += resultant if resultant > 1e-6 * total else 0.5 * total
-    return dofs, values, f, "force", ref
+        if np.hypot(*r) > 1e-6 * total:
+            resultants.append(r)
+        else:
+            own += 0.5 * total
+    if not resultants:
+        return own
+    r = np.array(resultants)
+    size = float(np.hypot(r[:, 0], r[:, 1]).sum())
+    balanced = np.hypot(*r.sum(axis=0)) <= 1e-6 * size
+    return own + (0.5 * size if balanced else size)
 
 
 def _state(solver, sp_, d, control, ref, f):
@@ -95,6 +124,7 @@ def _check_options(model, weibull, criterion: str, opts: dict) -> None:
         ("max_events", opts["max_events"], 1, None),
         ("teeth", opts["teeth"], 2, 1000),
         ("max_rank", opts["max_rank"], 0, MAX_RANK),
+        ("snapshots", opts["snapshots"], 1, None),
         (
             "snapshot_every",
             1 if opts["snapshot_every"] is None else opts["snapshot_every"],
@@ -134,6 +164,7 @@ def fracture(
     stop_load_ratio: float = 0.01,
     fragment: float = 0.01,
     max_rank: int = 240,
+    snapshots: int = 50,
     snapshot_every: int | None = None,
     progress: bool = False,
 ) -> FractureResult:
@@ -172,8 +203,11 @@ def fracture(
     max_rank : int
         Largest low-rank update before the stiffness is factorised afresh (0:
         refactorise at every event, the reference path).
+    snapshots : int
+        About this many states are kept (``FractureResult.snapshots``), spread over the
+        events actually run; the peak and the last state are always among them.
     snapshot_every : int, optional
-        Keep the state every this many events (default: about 50 snapshots).
+        Keep the state every this many events instead (and the peak and the last).
     progress : bool
         Show a progress bar of the events.
 
@@ -192,6 +226,7 @@ def fracture(
         stop_load_ratio=stop_load_ratio,
         fragment=fragment,
         max_rank=max_rank,
+        snapshots=snapshots,
         snapshot_every=snapshot_every,
         progress=progress,
         teeth=teeth,
@@ -300,6 +335,36 @@ class _Bonds:
         return False
 
 
+class _Kept:
+    """The states kept for the VTU series: every ``every`` events if it is given, else
+    about ``target`` spread over the events actually run (the spacing doubles whenever
+    the kept states outgrow 4/3 of the target); always the peak and the last."""
+
+    def __init__(self, target: int, every: int | None):
+        self.fixed = every is not None
+        self.every = every or 1
+        self.cap = max(2, math.ceil(4 * target / 3))
+        self.kept: list[Snapshot] = []
+        self.peak = self.last = None
+
+    def add(self, snap: Snapshot, peak: bool) -> None:
+        self.last = snap
+        if peak:
+            self.peak = snap
+        if snap.event % self.every:
+            return
+        self.kept.append(snap)
+        if not self.fixed and len(self.kept) > self.cap:
+            self.every *= 2
+            self.kept = [s for s in self.kept if s.event % self.every == 0]
+
+    def states(self) -> tuple:
+        """The kept states, the peak and the last, in event order."""
+        extra = [s for s in (self.peak, self.last) if s is not None]
+        by_event = {s.event: s for s in [*self.kept, *extra]}
+        return tuple(by_event[k] for k in sorted(by_event))
+
+
 class _Analysis:
     """The event loop of :func:`fracture`: state, one event, the result."""
 
@@ -312,9 +377,8 @@ class _Analysis:
         )
         self.pieces = Pieces(model, self.dofs, self.values, self.f, opts["fragment"])
         self.bond_tris = bond_triangles(model.mesh)
-        self.every = opts["snapshot_every"] or max(1, opts["max_events"] // 50)
+        self.snaps = _Kept(opts["snapshots"], opts["snapshot_every"])
         self.events: list[Event] = []
-        self.snaps: list[Snapshot] = []
         self.broken: list[int] = []
         self.peak = 0.0
 
@@ -367,12 +431,11 @@ class _Analysis:
             elongation=lam * float(elongation[e]),
             spring_lost=float(saved[0][e] - bonds.d[e]),
         )
-        if k % self.every == 0:
-            self.snaps.append(Snapshot(k, (lam * x).reshape(-1, 2), saved[0]))
         self.events.append(ev)
         self.x_last = lam * x
         if removed:
             self.broken.append(e)
+        self.snaps.add(Snapshot(k, self.x_last.reshape(-1, 2), saved[0]), ev.load > self.peak)
         self.peak = max(self.peak, ev.load)
         return _stop(
             self.pieces,
@@ -396,7 +459,7 @@ class _Analysis:
             u=self.x_last.reshape(-1, 2) if events else np.zeros((mesh.n_points, 2)),
             stiffness=self.bonds.d,
             broken=np.array(self.broken, dtype=np.int64),
-            snapshots=tuple(self.snaps),
+            snapshots=self.snaps.states(),
             stop_reason=reason,
             message=message,
             control=self.control,

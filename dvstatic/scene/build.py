@@ -235,7 +235,6 @@ class Scene:
                 exc.param, "seed"
             )
             raise self._err("fracture." + key, exc) from None
-        every = max(1, fr["max_events"] // max(fr["snapshots"], 1))
         return dict(
             ft=ft,
             gf=gf,
@@ -244,7 +243,7 @@ class Scene:
             teeth=fr["teeth"],
             weibull=weibull,
             stop_load_ratio=fr["stop_load_ratio"],
-            snapshot_every=every,
+            snapshots=fr["snapshots"],
         )
 
     def solve_options(self) -> dict:

@@ -283,7 +283,12 @@ SCHEMA: dict[str, F] = {
             "stop_load_ratio": F(
                 "number", "stop once the load falls below this fraction of the peak", default=0.01
             ),
-            "snapshots": F("int", "states kept for the VTU series (about)", default=50),
+            "snapshots": F(
+                "int",
+                "states kept for the VTU series (about; spread over the events run, always "
+                "the peak and the last)",
+                default=50,
+            ),
             "checks": F(
                 "tables",
                 "key numbers of the analysis printed (and written to the JSON) against a "
