@@ -143,9 +143,10 @@ def _run_fracture(sc, model, supports, loads, folder, args, say, t0: float) -> i
         data["seconds_total"] = time.perf_counter() - t0
         if o["png"] and res.events:
             curve = io.write_fracture_curve(
-                stage / f"{name}_curve.png", res, sc.data["title"] or None
+                stage / f"{name}_curve.png", res, sc.data["title"] or None, data["checks"]
             )
-            written.append(curve.name)
+            crack = io.write_crack_png(stage / f"{name}_crack.png", res, sc.data["title"] or None)
+            written += [curve.name, crack.name]
         if o["vtu"]:
             pvd = io.write_fracture_series(stage / f"{name}_fracture", res, name)
             series = sorted(p.relative_to(stage).as_posix() for p in pvd.parent.iterdir())
@@ -166,7 +167,7 @@ def _planned_outputs(sc) -> list[str]:
     o, name = sc.data["output"], sc.name
     if sc.data["fracture"] is not None:
         return [
-            *([f"{name}_curve.png"] if o["png"] else []),
+            *([f"{name}_curve.png", f"{name}_crack.png"] if o["png"] else []),
             *([f"{name}_fracture/{name}.pvd"] if o["vtu"] else []),
             f"{name}_fracture.json",
         ]
@@ -213,12 +214,13 @@ def _staged(folder):
     try:
         with folder.staging() as stage:
             yield stage
-    except BaseException:
+    except BaseException as exc:
         print(
             "stopped before the outputs were complete: nothing was written "
             f"({folder.path} {folder.state()})",
             file=sys.stderr,
         )
+        exc.dvstatic_reported = True
         raise
 
 
@@ -265,13 +267,32 @@ def _fe_reference(sc, mesh, supports, loads, say, nonlinear: bool):
         why = "the FE reference is linear, the solution nonlinear: not compared"
         print(f"note: {why}", file=sys.stderr)
         return None, why
-    say(f"FE reference (P{o['fe_order']}, {o['fe_refine']} refinement(s))")
+    dof = _fe_dof(mesh, o["fe_order"], o["fe_refine"])
+    say(
+        f"FE reference (P{o['fe_order']}, {o['fe_refine']} refinement(s), {dof:,} dof, "
+        f"roughly {max(1.0, 10.0 * (dof / 2.27e5) ** 1.2):.0f} s on 2 cores)"
+    )
     try:
         return _fe_solve(sc, mesh, supports, loads), ""
     except (SolverError, InputError) as exc:
         why = f"the FE reference failed ({exc}); the lattice results are written without it"
         print(f"warning: {why}", file=sys.stderr)
         return None, why
+    except KeyboardInterrupt:  # the lattice result is computed: keep it
+        why = "the FE reference was interrupted; the lattice results are written without it"
+        print(f"note: {why}; Ctrl-C again stops before they are", file=sys.stderr)
+        return None, why
+
+
+def _fe_dof(mesh, order: int, refine: int) -> int:
+    """Unknowns of the FE reference: each uniform refinement makes V + E vertices,
+    2 E + 3 T edges and 4 T triangles; P2 adds a node per edge (the estimate of its
+    time: 10 s for 227k dof, measured on the beam example)."""
+    v, t = mesh.n_points, len(mesh.triangles)
+    e = v + t - 1  # Euler, one body without holes (holes change it by a few)
+    for _ in range(refine):
+        v, e, t = v + e, 2 * e + 3 * t, 4 * t
+    return 2 * (v + e if order == 2 else v)
 
 
 def _fe_solve(sc, mesh, supports, loads):
@@ -306,9 +327,10 @@ def _write_outputs(
     with _staged(folder) as stage:
         written: list[str] = []
         if o["vtu"]:
-            written.append(io.write_vtu(stage / f"{sc.name}.vtu", sol).name)
+            written.append(io.write_vtu(stage / f"{sc.name}.vtu", sol, fe=fe).name)
             written.append(io.write_bonds_vtu(stage / f"{sc.name}_bonds.vtu", sol).name)
-        scale = o["scale"] or io.default_scale(sol)
+        view = io.picture_view(sol, o["view"])
+        scale = o["scale"] or io.default_scale(sol, view)
         if o["png"]:
             png = io.write_png(
                 stage / f"{sc.name}.png",
@@ -317,6 +339,7 @@ def _write_outputs(
                 scale=scale,
                 title=sc.data["title"] or None,
                 stress=method,
+                view=view,
             )
             written.append(png.name)
         data = io.summary(
@@ -331,7 +354,12 @@ def _write_outputs(
         if fe_failed:
             data["fe_reference"] = fe_failed
         if o["png"]:
-            data["picture"] = {"file": png.name, "field": o["field"], "magnification": scale}
+            data["picture"] = {
+                "file": png.name,
+                "field": o["field"],
+                "magnification": scale,
+                "view": list(view),
+            }
         data["dvstatic_version"] = __version__
         data["created"] = datetime.now(UTC).isoformat(timespec="seconds")
         data["seconds_total"] = time.perf_counter() - t0
@@ -368,18 +396,25 @@ def _run_scripts(names: list[Path], extra: list[str], args) -> int:
     from tqdm import tqdm
 
     failed = []
+    t_all = time.perf_counter()
     bar = tqdm(names, desc="scripts", unit="script", disable=not _show_progress(args))
     for i, path in enumerate(bar):
         bar.set_postfix_str(path.stem)
         if not args.quiet and bar.disable:  # no bar (not a terminal): a line per script
             print(f"[{i + 1}/{len(names)}] {path.stem} ...", file=sys.stderr, flush=True)
+        t0 = time.perf_counter()
         proc = subprocess.run(
             [sys.executable, str(path), *extra], capture_output=True, text=True, check=False
         )
-        tqdm.write(proc.stdout.rstrip()) if not args.quiet else None
+        if not args.quiet:
+            tqdm.write(proc.stdout.rstrip())
+            tqdm.write(f"-- {path.stem}: {time.perf_counter() - t0:.0f} s")
         if proc.returncode != 0:
             failed.append(path.stem)
             tqdm.write(f"FAILED {path.stem}:\n{proc.stderr.rstrip()}")
+    if not args.quiet:
+        total = time.perf_counter() - t_all
+        print(f"{len(names)} script(s) in {total / 60:.1f} min", file=sys.stderr)
     if failed:
         print(f"{len(failed)} script(s) failed: {', '.join(failed)}", file=sys.stderr)
         return 3
@@ -513,8 +548,13 @@ def main(argv: list[str] | None = None) -> int:
     except OSError as exc:  # a folder that cannot be written, a full disk
         print(f"error: {exc.strerror or exc}: {exc.filename or ''}".rstrip(": "), file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
+    except KeyboardInterrupt as exc:
+        if not getattr(exc, "dvstatic_reported", False):
+            print(
+                "interrupted before any output was written: files already in the output "
+                "folder are as they were",
+                file=sys.stderr,
+            )
         return 130
 
 

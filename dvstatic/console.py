@@ -8,6 +8,10 @@ from pathlib import Path
 __all__ = ["print_summary"]
 
 
+#: said once under the checks: how every printed difference is signed
+SIGN_CONVENTION = "in %: (value - reference) / |reference|; + means above the reference"
+
+
 def _model_line(md: dict) -> str:
     """One line on the model: material, plane, thickness, calibration and its cost."""
     txt = f"{md['type']} E = {md['E']:g}, nu = {md['nu']:g}, plane {md['plane']}"
@@ -132,6 +136,8 @@ def print_summary(sc, d: dict, written: list[Path]) -> None:
             )
         rows.append((f"stress on {name}", txt))
     rows += [(f"check: {c['name']}", _check_text(c)) for c in d.get("checks", [])]
+    if d.get("checks") or "fe" in d:
+        rows.append(("differences", SIGN_CONVENTION))
     rows.append(("files", ", ".join(str(w) for w in written) or "none"))
     width = max(len(k) for k, _ in rows)
     for k, v in rows:

@@ -12,7 +12,16 @@ import numpy as np
 
 from .mesh import Mesh
 
-__all__ = ["pyplot", "figure", "draw_mesh", "draw_deformed", "draw_beam_setup", "save"]
+__all__ = [
+    "pyplot",
+    "figure",
+    "draw_mesh",
+    "draw_deformed",
+    "draw_interfaces",
+    "interface_edges",
+    "draw_beam_setup",
+    "save",
+]
 
 
 def pyplot():
@@ -62,27 +71,62 @@ def draw_deformed(
     label: str = "|u|",
     cmap: str = "viridis",
     edges: bool = True,
+    shown: np.ndarray | None = None,
 ):
     """Deformed mesh ``x + scale u`` coloured by a nodal ``field`` (default ``|u|``).
 
-    The colour range is clipped to the 1st-99th percentiles of the field when the
-    extremes reach far beyond them (stress peaks under point loads would otherwise spend
-    the whole range on a few nodes); the colour bar then says so and shows arrows.
+    The colour range is that of the nodes ``shown`` (a boolean mask, shape (N,); default
+    all), clipped to the 1st-99th percentiles of the field when the extremes reach far
+    beyond them (stress peaks under point loads would otherwise spend the whole range on
+    a few nodes); the colour bar then says so and shows arrows.
     """
     plt = pyplot()
     u = np.asarray(u, dtype=float).reshape(-1, 2)
     p = mesh.points + scale * u
     f = np.hypot(u[:, 0], u[:, 1]) if field is None else np.asarray(field, dtype=float)
-    vmin, vmax, extend = robust_range(f)
+    vmin, vmax, extend = robust_range(f if shown is None or not shown.any() else f[shown])
+    clipped = extend != "neither"
+    below, above = bool(f.min() < vmin), bool(f.max() > vmax)
+    extend = {(False, False): "neither", (True, False): "min", (False, True): "max"}.get(
+        (below, above), "both"
+    )
     tpc = ax.tripcolor(
         p[:, 0], p[:, 1], mesh.triangles, f, shading="gouraud", cmap=cmap, vmin=vmin, vmax=vmax
     )
     if edges and mesh.n_points <= 20000:
         draw_mesh(ax, mesh, p, colors="k", linewidths=0.15, alpha=0.5)
-    if extend != "neither":
+    if clipped:
         label += " (colours clipped to the 1-99 % percentiles)"
+    elif extend != "neither":
+        label += " (range of the nodes in view, away from point loads)"
     plt.colorbar(tpc, ax=ax, label=label, shrink=0.8, extend=extend)
     ax.set_aspect("equal")
+    return ax
+
+
+def interface_edges(mesh: Mesh, tri_material: np.ndarray) -> np.ndarray:
+    """Edges shared by two triangles of different materials, shape (k, 2) node pairs."""
+    t = mesh.triangles
+    e = np.sort(np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]]), axis=1)
+    owner = np.tile(np.arange(len(t)), 3)
+    order = np.lexsort((e[:, 1], e[:, 0]))
+    e, owner = e[order], owner[order]
+    same = np.all(e[1:] == e[:-1], axis=1)
+    mat = np.asarray(tri_material)
+    cut = same & (mat[owner[1:]] != mat[owner[:-1]])
+    return e[1:][cut]
+
+
+def draw_interfaces(ax, mesh: Mesh, tri_material: np.ndarray, points: np.ndarray | None = None):
+    """Draw the material interfaces (edges between triangles of different materials)."""
+    from matplotlib.collections import LineCollection
+
+    edges = interface_edges(mesh, tri_material)
+    if len(edges):
+        p = mesh.points if points is None else points
+        segs = np.stack([p[edges[:, 0]], p[edges[:, 1]]], axis=1)
+        ax.add_collection(LineCollection(segs, colors="w", linewidths=1.6))
+        ax.add_collection(LineCollection(segs, colors="k", linewidths=0.8))
     return ax
 
 

@@ -419,6 +419,8 @@ def fracture_lines(result, checks: list[dict], title: str, written=()) -> list[s
         lines.append(
             f"  check: {c['name']}: lattice {value}, reference {c['reference']:.6g}{src}: {diff}"
         )
+    if checks:
+        lines.append("  differences in %: (value - reference) / |reference|")
     lines.append(
         f"  time      strengths {t.get('strength', 0):.2f} s, events {t.get('events', 0):.2f} s "
         f"({result.stats['events_per_second']:.1f} events/s, "

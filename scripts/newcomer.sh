@@ -6,16 +6,18 @@
 #   * every example prints its key numbers against their references ("check: ...");
 #   * every example writes its VTU, PNG and JSON;
 #   * --overwrite into a folder of the user's (notes, a subfolder, the scene itself,
-#     --out .) replaces only the run's own files, twice over.
+#     --out .) replaces only the run's own files, twice over;
+#   * the tunnel's picture is framed on the tunnel, its VTU carries the FE reference.
 #
-# Usage: bash scripts/newcomer.sh [REPOSITORY]   (default: this checkout)
+# Usage: bash scripts/newcomer.sh [REPOSITORY]   (default: this checkout; KEEP=1 keeps
+# the clone and every example's outputs, to open the pictures)
 # Takes about 10 minutes on 2 cores (the test suite is most of it). Exit 0 when all is
 # well; otherwise the failures are listed and the exit status is 1.
 set -uo pipefail
 
 repo="${1:-$(cd "$(dirname "$0")/.." && pwd)}"
 work="$(mktemp -d)"
-trap 'rm -rf "$work"' EXIT
+trap 'if [ -n "${KEEP:-}" ]; then echo "kept $work"; else rm -rf "$work"; fi' EXIT
 log="$work/log"
 mkdir -p "$log"
 failures=()
@@ -56,7 +58,8 @@ for scene in examples/*.toml; do
     [ "$code" -eq 0 ] || fail "$name exited with $code"
     grep -q "check: " "$log/$name.txt" || fail "$name prints no key number against a reference"
     if grep -q "^\[fracture\]" "$scene"; then
-        for f in "${name}_fracture.json" "${name}_curve.png" "${name}_fracture/${name}.pvd"; do
+        for f in "${name}_fracture.json" "${name}_curve.png" "${name}_crack.png" \
+            "${name}_fracture/${name}.pvd"; do
             [ -s "$out/$f" ] || fail "$name wrote no $f"
         done
     else
@@ -65,6 +68,15 @@ for scene in examples/*.toml; do
         done
     fi
 done
+
+# the pictures frame what matters: the tunnel (2 % of its body) is framed, the whole
+# beam is shown; the tunnel's VTU carries the FE reference beside the lattice
+view_of() { .venv/bin/python -c "import json,sys; print(json.load(open(sys.argv[1]))['picture']['view'])" "$1"; }
+tunnel_view="$(view_of "$work/out/tunnel/tunnel.json" 2>/dev/null)"
+[ "$tunnel_view" = "[-5.0, 5.0, -5.0, 5.0]" ] || fail "the tunnel picture is not framed on the tunnel ($tunnel_view)"
+.venv/bin/python -c "import meshio,sys; d=meshio.read(sys.argv[1]).point_data; sys.exit('fe_displacement' not in d)" \
+    "$work/out/tunnel/tunnel.vtu" || fail "the tunnel VTU has no FE reference fields"
+echo "== pictures: tunnel framed on $tunnel_view; look at them in $work/out (kept with KEEP=1)"
 
 # data loss: a folder with foreign files, a subfolder and the scene inside it, two runs
 p="$work/mine"

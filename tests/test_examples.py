@@ -251,6 +251,7 @@ def test_notched_beam_fracture_scene(tmp_path):
     assert {c["name"] for c in d["checks"]} == {"peak load", "energy released"}
     assert "check: peak load" in proc.stdout
     assert (out / "notched_beam_curve.png").stat().st_size > 1000
+    assert (out / "notched_beam_crack.png").stat().st_size > 1000
     pvd = (out / "notched_beam_fracture" / "notched_beam.pvd").read_text()
     files = [line.split('file="')[1].split('"')[0] for line in pvd.splitlines() if "file=" in line]
     assert len(files) > 2 and all((out / "notched_beam_fracture" / f).exists() for f in files)
@@ -259,6 +260,21 @@ def test_notched_beam_fracture_scene(tmp_path):
     last = meshio.read(out / "notched_beam_fracture" / files[-1])
     assert last.cell_data["broken"][0].sum() == d["n_broken"]
     assert np.all(np.isfinite(last.point_data["damage"]))
+
+
+def test_brazilian_fracture_scene(tmp_path):
+    """Strips (pressure `within` a box), CVT, Weibull: the crack runs along the loaded
+    diameter and the reported load is one strip's force (splitting strength near ft)."""
+    out = tmp_path / "bf"
+    cmd = [sys.executable, "-m", "dvstatic", "run", str(EXAMPLES / "brazilian_fracture.toml")]
+    cmd += ["--out", str(out), "--quiet", "--set", "mesh.h=0.07"]
+    proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
+    assert proc.returncode == 0, proc.stderr
+    d = json.loads((out / "brazilian_fracture_fracture.json").read_text())
+    peak = max(e["load"] for e in d["events"])
+    assert 2 * peak / (np.pi * 2.0) == pytest.approx(3.0, rel=0.15)  # 2 P / (pi D t) ~ ft
+    assert (out / "brazilian_fracture_crack.png").stat().st_size > 1000
+    assert d["control"] == "force" and d["n_broken"] > 5
 
 
 @pytest.mark.parametrize(

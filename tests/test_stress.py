@@ -249,3 +249,22 @@ def test_a_mesh_that_mixes_micro_structures_is_warned_about(caplog):
     with caplog.at_level(logging.WARNING, logger="dvstatic.lattice.calibration.relaxed"):
         dv.DV(mesh, E, NU)
     assert "mixes micro-structures" in caplog.text
+
+
+def test_cook_membrane_stresses_on_slanted_straight_edges():
+    """Straight edges that are not axis-aligned (Cook's membrane) are not mistaken for
+    holes, and the circle fit stays well posed there (it used to be singular); away
+    from the four corners (two of them singular) the recovered stress is within 3 % rms
+    (of the largest) of P2 FE refined twice, at 503 nodes (measured 2.1 %, 0.96 % at
+    1,704)."""
+    corners = [(0.0, 0.0), (48.0, 44.0), (48.0, 60.0), (0.0, 44.0)]
+    mesh = dv.mesh.polygon(corners, 2.0, names=["bottom", "right", "top", "left"])
+    sup, loads = [dv.Fix("left")], [dv.Traction("right", (0.0, 100.0 / 16.0))]
+    sol = dv.solve(dv.DV(mesh, 70.0, 1 / 3, plane="strain"), sup, loads)
+    s = sol.stress()
+    assert np.all(np.isfinite(s))
+    x = mesh.points
+    ref = dv.fem.solve(sol.model, sup, loads, refine=2).stress(x)
+    far = np.min([np.hypot(*(x - c).T) for c in corners], axis=0) > 6.0
+    err = np.linalg.norm((s - ref)[far].reshape(-1, 4), axis=1) / np.abs(ref[far]).max()
+    assert np.sqrt(np.mean(err**2)) < 0.03

@@ -28,7 +28,7 @@ def _compliance(L, D, a, E, nu, t, h_near, h_far, spacing):
     def size(p):
         return np.clip(h_near + 0.15 * np.abs(p[:, 0] - x0), h_near, h_far)
 
-    mesh = dv.mesh.polygon([(0, 0), (x0, 0), (x0, D), (0, D)], size, kind="lattice")
+    mesh = dv.mesh.polygon([(0, 0), (x0, 0), (x0, D), (0, D)], size, kind="cvt")
     fe = build(mesh, 0, 2)
     basis = skfem.Basis(fe.skfem, skfem.ElementVector(skfem.ElementTriP2()))
     lam = E * nu / (1 - nu**2)

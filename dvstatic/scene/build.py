@@ -119,6 +119,24 @@ class Scene:
         except InputError as exc:
             raise self._err(_MODEL_KEYS.get(exc.param, "material"), exc) from None
 
+    def _edges(self, mesh, ld: dict, key: str):
+        """The part of a traction or pressure, or with ``within`` its edges whose two
+        ends lie in the box (a loading platen, a strip)."""
+        part = self._nodes(mesh, ld, key)
+        if ld["within"] is None:
+            return part
+        x0, x1, y0, y1 = ld["within"]
+        edges = mesh.part_edges(part)
+        p = mesh.points[edges]
+        keep = np.all(
+            (p[..., 0] >= x0) & (p[..., 0] <= x1) & (p[..., 1] >= y0) & (p[..., 1] <= y1), axis=1
+        )
+        if not keep.any():
+            raise SceneError(
+                self.path, f"{key}.within", f"no edge of part {part!r} lies within {ld['within']}"
+            )
+        return edges[keep]
+
     def _nodes(self, mesh, item: dict, key: str, tolerance: float = SNAP_TOLERANCE):
         if item.get("at") is not None:
             try:
@@ -164,10 +182,10 @@ class Scene:
                 out.append(BodyForce(tuple(ld["value"]), region=region))
             elif ld["type"] == "traction":
                 value = Profile(ld["value_at"]) if ld["value_at"] is not None else ld["value"]
-                out.append(Traction(self._nodes(mesh, ld, key), value))
+                out.append(Traction(self._edges(mesh, ld, key), value))
             elif ld["type"] == "pressure":
                 out.append(
-                    Pressure(self._nodes(mesh, ld, key), _pressure(ld), follower=ld["follower"])
+                    Pressure(self._edges(mesh, ld, key), _pressure(ld), follower=ld["follower"])
                 )
             else:
                 nodes = self._nodes(mesh, ld, key, LOAD_SNAP_TOLERANCE)

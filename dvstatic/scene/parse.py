@@ -142,6 +142,10 @@ def _check_value(path, where: str, v, f: F):
         if not isinstance(v, list) or len(v) != 2 or not all(_finite(x) for x in v):
             fail("two finite numbers [x, y]")
         return [float(x) for x in v]
+    if k == "box":
+        if not isinstance(v, list) or len(v) != 4 or not all(_finite(x) for x in v):
+            fail("four finite numbers [x0, x1, y0, y1]")
+        return [float(x) for x in v]
     if k == "points":
         if not isinstance(v, list) or not all(
             isinstance(p, list) and len(p) == 2 and all(_finite(x) for x in p) for p in v
@@ -207,6 +211,7 @@ def _check_rules(path, d: dict) -> None:
     if m["type"] == "file" and m["holes"]:
         raise SceneError(path, "mesh.holes", "holes cannot be added to a mesh read from a file")
     _check_material(path, "material", d["material"], d["material"]["plane"])
+    _check_picture(path, d["output"], d["material"]["plane"])
     if d["material"]["thickness"] is not None and d["material"]["thickness"] <= 0:
         raise SceneError(
             path, "material.thickness", f"must be > 0, got {d['material']['thickness']}"
@@ -274,6 +279,18 @@ def _check_fracture_outputs(path, d: dict) -> None:
         )
 
 
+def _check_picture(path, o: dict, plane: str) -> None:
+    if o["field"] == "szz" and plane == "stress":
+        raise SceneError(
+            path,
+            "output.field",
+            "szz is zero in plane stress: pick another field or material.plane = strain",
+        )
+    v = o["view"]
+    if v is not None and not (v[0] < v[1] and v[2] < v[3]):
+        raise SceneError(path, "output.view", f"needs x0 < x1 and y0 < y1, got {v}")
+
+
 def _check_material(path, key: str, mat: dict, plane: str) -> None:
     if mat["E"] <= 0:
         raise SceneError(path, f"{key}.E", f"must be > 0, got {mat['E']}")
@@ -295,8 +312,8 @@ def _check_profile(path, key: str, rows: list, n_values: int) -> None:
 
 #: keys each load type accepts (besides type)
 _LOAD_KEYS = {
-    "traction": ("where", "value", "value_at"),
-    "pressure": ("where", "p", "p_at", "gamma", "level", "follower"),
+    "traction": ("where", "within", "value", "value_at"),
+    "pressure": ("where", "within", "p", "p_at", "gamma", "level", "follower"),
     "body": ("value", "region"),
     "point": ("where", "at", "value"),
 }
@@ -310,6 +327,9 @@ def _check_load(path, key: str, ld: dict) -> None:
             raise SceneError(path, f"{key}.{k}", f"not a key of a {kind} load")
     if kind in ("traction", "pressure") and not isinstance(ld["where"], str):
         raise SceneError(path, f"{key}.where", f"a {kind} needs `where` = a boundary part name")
+    w = ld["within"]
+    if w is not None and not (w[0] < w[1] and w[2] < w[3]):
+        raise SceneError(path, f"{key}.within", f"needs x0 < x1 and y0 < y1, got {w}")
     if kind == "point" and (ld["where"] is None) == (ld["at"] is None):
         raise SceneError(path, key, "give exactly one of `where` or `at`")
     if kind in ("body", "point") and ld["value"] is None:

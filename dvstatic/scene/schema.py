@@ -222,6 +222,11 @@ SCHEMA: dict[str, F] = {
                 choices=("traction", "pressure", "body", "point"),
             ),
             "where": F("nodes", "traction, pressure: part name; point: part name or node indices"),
+            "within": F(
+                "box",
+                "traction, pressure: only the part's edges with both ends in [x0, x1, y0, y1] "
+                "(length): a loading strip or platen",
+            ),
             "at": F(
                 "point",
                 "point: instead of where, the node nearest to this point (refused if no "
@@ -252,7 +257,8 @@ SCHEMA: dict[str, F] = {
         "table",
         "fracture by bond breaking (dv.fracture) instead of one elastic solve: the loads and "
         "prescribed displacements are scaled event by event; writes <name>_fracture.json, "
-        "<name>_curve.png and the VTU series <name>_fracture/<name>.pvd ([solver] and "
+        "<name>_curve.png (load against displacement), <name>_crack.png (the broken bonds) "
+        "and the VTU series <name>_fracture/<name>.pvd ([solver] and "
         "output.fe_compare, field, stress, probes, part_stress and checks do not apply)",
         default=None,
         schema={
@@ -327,7 +333,8 @@ SCHEMA: dict[str, F] = {
             "vtu": F(
                 "bool",
                 "<name>.vtu (triangles: displacement, stress tensors, von Mises, area, "
-                "material) and <name>_bonds.vtu (bonds: tension, length)",
+                "material; with fe_compare the FE fields and the differences) and "
+                "<name>_bonds.vtu (bonds: tension, length)",
                 default=True,
             ),
             "png": F("bool", "<name>.png: deformed mesh coloured by `field`", default=True),
@@ -349,6 +356,12 @@ SCHEMA: dict[str, F] = {
                 choices=("recovered", "virial", "strain"),
             ),
             "scale": F("number", "displacement magnification of the picture (default: auto)"),
+            "view": F(
+                "box",
+                "region of the picture [x0, x1, y0, y1] (length; its colour range is taken "
+                "there); default: the whole body, or the holes and loaded parts framed when "
+                "they are a small part of it",
+            ),
             "name": F("string", "file name stem (default: the scene file's stem)"),
             "fe_compare": F(
                 "bool", "solve the FE reference on the same triangles and compare", default=False

@@ -232,13 +232,18 @@ class Boundary:
             hh = h[self.slot_node[slots]]
             near = _arc_windows(s, CURVATURE_SPACINGS * hh, total)
             idx, valid = near
-            q = np.where(valid[..., None], p[idx], 0.0)
+            # circle x^2 + y^2 = 2 a x + 2 b y + c fitted in coordinates centred on the
+            # slot and scaled by its spacing (well conditioned at any position); a
+            # straight window (singular) gets a far centre from the ridge term
+            q = np.where(valid[..., None], (p[idx] - p[:, None, :]) / hh[:, None, None], 0.0)
             w = valid.astype(float)
             A = np.concatenate([2 * q, np.ones(q.shape[:-1] + (1,))], axis=-1) * w[..., None]
             rhs = (q**2).sum(-1) * w
-            M = np.einsum("nki,nkj->nij", A, A) + 1e-14 * np.eye(3)
+            M = np.einsum("nki,nkj->nij", A, A)
+            M += 1e-10 * np.trace(M, axis1=1, axis2=2)[:, None, None] * np.eye(3)
             c = np.linalg.solve(M, np.einsum("nki,nk->ni", A, rhs)[..., None])[..., 0]
-            radius = np.sqrt(np.maximum(c[:, 2] + c[:, 0] ** 2 + c[:, 1] ** 2, 0.0))
+            radius = hh * np.sqrt(np.maximum(c[:, 2] + c[:, 0] ** 2 + c[:, 1] ** 2, 0.0))
+            c[:, :2] = p + hh[:, None] * c[:, :2]
             normal = self.slot_normal[slots]
             toward = np.einsum("ni,ni->n", c[:, :2] - p, normal)
             hole = (valid.sum(1) >= 3) & (radius < HOLE_RADII * hh) & (toward > 0.5 * radius)
