@@ -27,6 +27,7 @@ from .errors import (
     MissingDependencyError,
     SingularError,
     SolverError,
+    UnknownRegionError,
     UnstableError,
 )
 from .mesh import Mesh
@@ -119,6 +120,7 @@ __all__ = [
     "SolverError",
     "InputError",
     "CalibrationError",
+    "UnknownRegionError",
     "SingularError",
     "UnstableError",
     "ConvergenceError",

@@ -28,7 +28,7 @@ import numpy as np
 
 from ._version import __version__
 from .console import print_summary
-from .errors import InputError, MissingDependencyError, SolverError
+from .errors import InputError, MissingDependencyError, SolverError, UnknownRegionError
 
 log = logging.getLogger("dvstatic")
 
@@ -128,6 +128,10 @@ def _run_fracture(sc, model, supports, loads, folder, args, say, t0: float) -> i
     )
     try:
         res = fracture(model, supports, loads, progress=_show_progress(args), **opts)
+    except UnknownRegionError as exc:  # a [[fracture.regions]] name the mesh lacks
+        names = [r["name"] for r in sc.data["fracture"]["regions"]]
+        key = f"fracture.regions[{names.index(exc.region)}].name" if exc.region in names else ""
+        raise _scene_error(sc, key or "fracture.regions", exc) from None
     except InputError as exc:
         raise _scene_error(sc, _fracture_key(sc, exc.param), exc) from None
     say("writing the outputs")

@@ -23,6 +23,7 @@ from typing import Any
 __all__ = [
     "InputError",
     "CalibrationError",
+    "UnknownRegionError",
     "SolverError",
     "SingularError",
     "UnstableError",
@@ -44,6 +45,15 @@ class InputError(ValueError):
     def __init__(self, message: str, param: str | None = None):
         super().__init__(message)
         self.param = param
+
+
+class UnknownRegionError(InputError):
+    """A region name the mesh does not have (``param`` names the option, ``region`` the
+    name)."""
+
+    def __init__(self, message: str, param: str | None = None, region: str | None = None):
+        super().__init__(message, param)
+        self.region = region
 
 
 class CalibrationError(InputError):

@@ -284,6 +284,11 @@ def test_brazilian_fracture_scene(tmp_path):
         ("gf = 0.124", "gf = 0.124\nweibull_length = 5.0", "fracture.weibull_length"),
         ("gf = 0.124", "gf = 1e-9", "fracture.gf"),
         ("gf = 0.124", "gf = 0.124\nweibull_m = 0.5", "fracture.weibull_m"),
+        (
+            "stop_load_ratio = 0.02",
+            'stop_load_ratio = 0.02\n\n[[fracture.regions]]\nname = "nosuch"\nft = 2.0',
+            "fracture.regions[0].name:",
+        ),
     ],
 )
 def test_fracture_scene_errors_name_the_key(tmp_path, old, new, key):

@@ -9,7 +9,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, UnknownRegionError
 from ..lattice import VoronoiModel
 from ..linalg import ConstrainedSystem, DirectSolver
 from ..mesh import mesh_dof_order
@@ -41,9 +41,10 @@ def per_bond(model: VoronoiModel, value, name: str) -> np.ndarray:
         tri = np.full(mesh.n_triangles, float(default))
         for region, v in values.items():
             if region not in mesh.regions:
-                raise InputError(
+                raise UnknownRegionError(
                     f"{name}: unknown region {region!r}; the mesh has {sorted(mesh.regions)}",
                     name,
+                    region,
                 )
             positive(v, f"{name}[{region!r}]")
             tri[mesh.regions[region]] = float(v)
