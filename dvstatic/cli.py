@@ -122,9 +122,10 @@ def _run_fracture(sc, model, supports, loads, folder, args, say, t0: float) -> i
     from .report import fracture_checks, fracture_lines
 
     opts = sc.fracture_options()
+    n = opts["options"].max_events
     say(
-        f"fracture ({model.kind}, {2 * model.mesh.n_points} dof, up to {opts['max_events']} "
-        "events; Ctrl-C stops and keeps the events so far)"
+        f"fracture ({model.kind}, {2 * model.mesh.n_points} dof, up to {n} events; Ctrl-C "
+        "stops and keeps the events so far)"
     )
     try:
         res = fracture(model, supports, loads, progress=_show_progress(args), **opts)

@@ -345,7 +345,6 @@ def test_per_region_strength():
         ({"ft": FT, "fragment": -0.1}, "fragment"),
         ({"ft": FT, "fragment": float("nan")}, "fragment"),
         ({"ft": FT, "snapshot_every": 0}, "snapshot_every"),
-        ({"ft": FT, "snapshot_every": 2.5}, "snapshot_every"),
         ({"ft": FT, "max_rank": 10**6}, "max_rank"),
         ({"ft": FT, "gf": {"grip": 1.0}}, "gf"),
     ],
@@ -535,3 +534,39 @@ def test_snapshots_span_the_run_and_keep_the_peak_and_the_last():
     assert max(np.diff(kept)) <= 2 * n / 4  # spread over the run, not bunched at its start
     last = res.snapshots[-1]
     assert np.array_equal(last.u, res.u)
+
+
+def test_options_of_the_wrong_type_are_type_errors_and_unknown_ones_are_listed():
+    sup, loads = pulled()
+    model = dv.DV(plate(0.2), E=E, nu=NU)
+    with pytest.raises(TypeError, match="snapshot_every must be an integer"):
+        dv.fracture(model, sup, loads, ft=FT, snapshot_every=2.5)
+    with pytest.raises(TypeError, match="unknown fracture option.*'max_event'.*accepted"):
+        dv.fracture(model, sup, loads, ft=FT, max_event=3)
+    opts = dv.FractureOptions(max_events=5, teeth=4)
+    merged = dv.FractureOptions.from_kwargs(opts, max_events=3)
+    assert (merged.max_events, merged.teeth) == (3, 4)
+    res = dv.fracture(model, sup, loads, ft=FT, options=opts, max_events=1)
+    assert len(res.events) == 1  # keywords given as well override the options object
+
+
+def test_fracture_options_drive_the_signature_the_scene_and_the_docs():
+    """FractureOptions is the one source (as SolveOptions is for dv.solve)."""
+    import dataclasses
+    import inspect
+    from pathlib import Path
+
+    from dvstatic.scene import SCHEMA
+    from dvstatic.solvers.options import options_markdown
+
+    names = [f.name for f in dataclasses.fields(dv.FractureOptions)]
+    params = list(inspect.signature(dv.fracture).parameters)
+    assert params[-len(names) :] == names
+    for f in dataclasses.fields(dv.FractureOptions):
+        assert f"{f.name} : " in dv.fracture.__doc__
+        in_scene = f.name in SCHEMA["fracture"].schema
+        assert in_scene == f.metadata["scene"], f.name
+        if in_scene:
+            assert SCHEMA["fracture"].schema[f.name].default == f.default
+    api = (Path(__file__).resolve().parents[1] / "docs" / "api.md").read_text()
+    assert options_markdown(dv.FractureOptions) in api

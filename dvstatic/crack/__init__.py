@@ -1,14 +1,24 @@
 """Quasi-static fracture of DV/RV lattices by bond breaking, event by event.
 
-``dv.fracture(model, supports, loads, ft=..., gf=None, max_events=...)`` runs a
+``dv.fracture(model, supports, loads, ft=..., gf=None, max_events=...)`` (options:
+:class:`.FractureOptions`, :mod:`.options`) runs a
 sequentially linear analysis (:mod:`.sla`) with bond strengths derived from the
 material's tensile strength (:mod:`.strength`), optional saw-tooth softening with a
 fracture energy, and factorisation updates between events (:mod:`.updates`). What
 breaking a bond does to the DV/RV force law is in :mod:`dvstatic.lattice.damage`.
 """
 
+from .options import FractureOptions
 from .result import Event, FractureResult, Snapshot
 from .sla import EQUILIBRIUM_TOL, fracture
 from .strength import Weibull
 
-__all__ = ["fracture", "Weibull", "Event", "FractureResult", "Snapshot", "EQUILIBRIUM_TOL"]
+__all__ = [
+    "fracture",
+    "FractureOptions",
+    "Weibull",
+    "Event",
+    "FractureResult",
+    "Snapshot",
+    "EQUILIBRIUM_TOL",
+]

@@ -10,9 +10,9 @@ load-displacement curve as they come (the load factor of the next event may be l
 
 from __future__ import annotations
 
+import inspect
 import logging
 import math
-import numbers
 import time
 
 import numpy as np
@@ -25,7 +25,9 @@ from ..mesh import Mesh
 from ..problem import constraints, load_vector
 from ..problem.loads import nodal_forces
 from ..problem.select import as_list
-from .criterion import CRITERIA, Measure, per_bond, strengths
+from ..solvers.options import options_docstring
+from .criterion import Measure, per_bond, strengths
+from .options import FractureOptions
 from .pieces import Pieces, bond_triangles
 from .result import Event, FractureResult, Snapshot
 from .strength import MIN_EXCESS, Weibull, smallest_gf, teeth_at
@@ -41,8 +43,6 @@ EQUILIBRIUM_TOL = 1e-10
 #: average (Buffon: sum_e r_e l_e |sin theta_e| / A with sum_e r_e l_e = 2 A and the mean
 #: |sin| 2 / pi): each bond gets this share of gf times its face
 BUFFON = np.pi / 4
-#: largest low-rank update (columns) before the stiffness is factorised afresh
-MAX_RANK = 3000
 #: secant stiffness (relative to the initial one) below which the body is a mechanism
 MECHANISM = 1e-6
 
@@ -115,39 +115,13 @@ def _state(solver, sp_, d, control, ref, f):
     return x, res, float(reaction @ solver.values) / ref, ref
 
 
-def _check_options(model, weibull, criterion: str, opts: dict) -> None:
+def _check_options(model, weibull) -> None:
     if not isinstance(model, VoronoiModel):
         raise TypeError(f"model must be a DV or RV model, got {type(model).__name__}")
     if model.mesh.is_periodic:
         raise InputError("fracture needs a bounded mesh, got a periodic one", "model")
-    for name, v, low, high in (
-        ("max_events", opts["max_events"], 1, None),
-        ("teeth", opts["teeth"], 2, 1000),
-        ("max_rank", opts["max_rank"], 0, MAX_RANK),
-        ("snapshots", opts["snapshots"], 1, None),
-        (
-            "snapshot_every",
-            1 if opts["snapshot_every"] is None else opts["snapshot_every"],
-            1,
-            None,
-        ),
-    ):
-        ok = isinstance(v, numbers.Integral) and not isinstance(v, bool) and v >= low
-        if not ok or (high is not None and v > high):
-            top = "" if high is None else f" and <= {high}"
-            raise InputError(f"{name} must be an integer >= {low}{top}, got {v!r}", name)
-    for name, v, closed in (
-        ("stop_load_ratio", opts["stop_load_ratio"], False),
-        ("fragment", opts["fragment"], True),
-    ):
-        ok = isinstance(v, numbers.Real) and not isinstance(v, bool) and math.isfinite(v)
-        if not ok or v < 0 or (v > 1 if closed else v >= 1):
-            bound = "[0, 1]" if closed else "[0, 1)"
-            raise InputError(f"{name} must lie in {bound}, got {v!r}", name)
     if weibull is not None and not isinstance(weibull, Weibull):
         raise TypeError(f"weibull must be a dvstatic.crack.Weibull, got {type(weibull).__name__}")
-    if criterion not in CRITERIA:
-        raise InputError(f"criterion must be one of {CRITERIA}, got {criterion!r}", "criterion")
 
 
 def fracture(
@@ -157,18 +131,44 @@ def fracture(
     *,
     ft,
     gf=None,
-    max_events: int = 1000,
     weibull: Weibull | None = None,
-    criterion: str = "stress",
-    teeth: int = 30,
-    stop_load_ratio: float = 0.01,
-    fragment: float = 0.01,
-    max_rank: int = 240,
-    snapshots: int = 50,
-    snapshot_every: int | None = None,
-    progress: bool = False,
+    options: FractureOptions | None = None,
+    **kwargs,
 ) -> FractureResult:
-    """Quasi-static fracture by bond breaking, event by event (sequentially linear).
+    opts = FractureOptions.from_kwargs(options, **kwargs)
+    _check_options(model, weibull)
+    timings: dict[str, float] = {}
+    t_start = time.perf_counter()
+    dofs, values, f, control, ref = _reference(model, supports, loads)
+    sp_ = _split(model)
+    measure = Measure(model, sp_, opts.criterion)
+    s0, s_tension = strengths(model, measure, ft, weibull, timings, dofs)
+    energy = None if gf is None else _energies(model, gf, s_tension)
+    _warn_rows(model.mesh)
+    return _run(
+        model, sp_, measure, s0, energy, (dofs, values, f, control, ref), timings, t_start, opts
+    )
+
+
+def _signature() -> inspect.Signature:
+    kw = inspect.Parameter.KEYWORD_ONLY
+    params = [
+        inspect.Parameter("model", inspect.Parameter.POSITIONAL_OR_KEYWORD),
+        inspect.Parameter("supports", inspect.Parameter.POSITIONAL_OR_KEYWORD),
+        inspect.Parameter("loads", inspect.Parameter.POSITIONAL_OR_KEYWORD, default=None),
+        inspect.Parameter("ft", kw),
+        inspect.Parameter("gf", kw, default=None),
+        inspect.Parameter("weibull", kw, default=None),
+        inspect.Parameter("options", kw, default=None),
+    ]
+    defaults = FractureOptions()
+    for name in FractureOptions.__dataclass_fields__:
+        params.append(inspect.Parameter(name, kw, default=getattr(defaults, name)))
+    return inspect.Signature(params, return_annotation=FractureResult)
+
+
+fracture.__signature__ = _signature()
+fracture.__doc__ = f"""Quasi-static fracture by bond breaking, event by event (sequentially linear).
 
     Parameters
     ----------
@@ -180,36 +180,15 @@ def fracture(
         Reference loads (``Traction``, ``Pressure``, ``BodyForce``, ``PointLoad``). The
         loads and the prescribed displacements are multiplied by the load factor.
     ft : float or dict
-        Tensile strength (stress units), or ``{"default": ft, region: ft_r}``.
+        Tensile strength (stress units), or ``{{"default": ft, region: ft_r}}``.
     gf : float or dict, optional
         Fracture energy (energy per unit crack area, e.g. N/m): a cracked bond softens
         in ``teeth`` saw-tooth steps. None: brittle bonds (removed at their strength).
-    max_events : int
-        Stop after this many events.
     weibull : Weibull, optional
         Random strength field.
-    criterion : {"stress", "tension"}
-        What an intact bond compares with its strength: the normal stress across its
-        Voronoi face (the default: a Rankine criterion, unaffected by compression along
-        the face) or its tension (which compression along the face raises: a lattice
-        under tension ``s`` and compression ``3 s`` cracks at about ``ft / 2.6``).
-    teeth : int
-        Saw-tooth steps of the softening (>= 2; with ``gf`` only).
-    stop_load_ratio : float
-        Stop once the load falls below this fraction of the peak (0 to never).
-    fragment : float
-        A piece that is no longer held stops the analysis if it carries load or has more
-        than this fraction of the nodes; smaller unloaded fragments are left hanging.
-    max_rank : int
-        Largest low-rank update before the stiffness is factorised afresh (0:
-        refactorise at every event, the reference path).
-    snapshots : int
-        About this many states are kept (``FractureResult.snapshots``), spread over the
-        events actually run; the peak and the last state are always among them.
-    snapshot_every : int, optional
-        Keep the state every this many events instead (and the peak and the last).
-    progress : bool
-        Show a progress bar of the events.
+    options : FractureOptions, optional
+        All options at once; keywords given as well override it.
+{options_docstring(cls=FractureOptions)}
 
     Returns
     -------
@@ -218,31 +197,11 @@ def fracture(
     Raises
     ------
     InputError
-        Bad ``ft``, ``gf`` (or one too small for the mesh), no load, supports that leave a
-        rigid motion free, a periodic mesh.
+        Bad ``ft``, ``gf`` (or one too small for the mesh) or option, no load, supports
+        that leave a rigid motion free, a periodic mesh.
+    TypeError
+        An unknown option, or an option of the wrong type.
     """
-    opts = dict(
-        max_events=max_events,
-        stop_load_ratio=stop_load_ratio,
-        fragment=fragment,
-        max_rank=max_rank,
-        snapshots=snapshots,
-        snapshot_every=snapshot_every,
-        progress=progress,
-        teeth=teeth,
-    )
-    _check_options(model, weibull, criterion, opts)
-    timings: dict[str, float] = {}
-    t_start = time.perf_counter()
-    dofs, values, f, control, ref = _reference(model, supports, loads)
-    sp_ = _split(model)
-    measure = Measure(model, sp_, criterion)
-    s0, s_tension = strengths(model, measure, ft, weibull, timings, dofs)
-    energy = None if gf is None else _energies(model, gf, s_tension)
-    _warn_rows(model.mesh)
-    return _run(
-        model, sp_, measure, s0, energy, (dofs, values, f, control, ref), timings, t_start, opts
-    )
 
 
 #: mesh kinds already warned about (once per process, as :mod:`warnings` would)
@@ -371,13 +330,13 @@ class _Analysis:
     def __init__(self, model, sp_, measure, s0, energy, problem, opts):
         self.dofs, self.values, self.f, self.control, self.ref = problem
         self.model, self.sp, self.measure, self.s0, self.opts = model, sp_, measure, s0, opts
-        self.bonds = _Bonds(s0, model.operator.spring, energy, opts["teeth"])
+        self.bonds = _Bonds(s0, model.operator.spring, energy, opts.teeth)
         self.solver = UpdatedSolver(
-            model.mesh, sp_, self.dofs, self.values, self.f, max_rank=opts["max_rank"]
+            model.mesh, sp_, self.dofs, self.values, self.f, max_rank=opts.max_rank
         )
-        self.pieces = Pieces(model, self.dofs, self.values, self.f, opts["fragment"])
+        self.pieces = Pieces(model, self.dofs, self.values, self.f, opts.fragment)
         self.bond_tris = bond_triangles(model.mesh)
-        self.snaps = _Kept(opts["snapshots"], opts["snapshot_every"])
+        self.snaps = _Kept(opts.snapshots, opts.snapshot_every)
         self.events: list[Event] = []
         self.broken: list[int] = []
         self.peak = 0.0
@@ -408,7 +367,7 @@ class _Analysis:
         try:
             removed = bonds.advance(e, lam * float(elongation[e]))
             self.solver.touch(self.bond_tris[e])
-            if self.opts["max_rank"] == 0:
+            if self.opts.max_rank == 0:
                 self.solver.rebase(*self.sp.factors(bonds.d))
             self._solve()
         except KeyboardInterrupt:  # the event did not happen: undo the bond's change
@@ -446,7 +405,7 @@ class _Analysis:
             ev,
             self.peak,
             self.res,
-            self.opts["stop_load_ratio"],
+            self.opts.stop_load_ratio,
             k,
             self.p_ref / self.u_ref / self.k_initial,
         )
@@ -467,7 +426,7 @@ class _Analysis:
             seconds=timings,
             stats={
                 "factorisations": self.solver.factorisations,
-                "max_rank": self.opts["max_rank"],
+                "max_rank": self.opts.max_rank,
                 "events_per_second": len(events) / loop if loop > 0 else float("nan"),
                 "max_residual": max((ev.residual for ev in events), default=0.0),
             },
@@ -477,12 +436,12 @@ class _Analysis:
 def _run(model, sp_, measure, s0, energy, problem, timings, t_start, opts) -> FractureResult:
     """The event loop (see :func:`fracture`); Ctrl-C keeps the events so far."""
     run = _Analysis(model, sp_, measure, s0, energy, problem, opts)
-    n = opts["max_events"]
+    n = opts.max_events
     reason, message = "max_events", f"stopped after max_events = {n} events"
     t0 = time.perf_counter()
     timings["setup"] = t0 - t_start
     run.start()
-    bar = _bar(opts["progress"], n)
+    bar = _bar(opts.progress, n)
     try:
         for k in range(n):
             stop = run.step(k)

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..crack.options import FractureOptions
 from ..errors import CalibrationError, InputError
 from ..io import read_mesh
 from ..lattice import DV, RV
@@ -16,7 +17,7 @@ from ..mesh.graded import size_near
 from ..mesh.locate import snap_point
 from ..problem import BodyForce, Fix, PointLoad, Pressure, Traction, nearest_node
 from ..problem.select import LOAD_SNAP_TOLERANCE, SNAP_TOLERANCE
-from .schema import SOLVER_KEYS, SceneError
+from .schema import FRACTURE_KEYS, SOLVER_KEYS, SceneError
 
 __all__ = ["Scene"]
 
@@ -239,8 +240,6 @@ class Scene:
                 )
             if gf is not None:
                 gf = {"default": gf, **{r["name"]: r["gf"] for r in with_gf}}
-        if fr["snapshots"] < 1:
-            raise SceneError(self.path, "fracture.snapshots", "must be >= 1")
         if fr["weibull_m"] is None and (fr["weibull_length"] or fr["seed"]):
             key = "fracture.weibull_length" if fr["weibull_length"] else "fracture.seed"
             raise SceneError(self.path, key, "applies to a random field: give weibull_m too")
@@ -253,16 +252,11 @@ class Scene:
                 exc.param, "seed"
             )
             raise self._err("fracture." + key, exc) from None
-        return dict(
-            ft=ft,
-            gf=gf,
-            max_events=fr["max_events"],
-            criterion=fr["criterion"],
-            teeth=fr["teeth"],
-            weibull=weibull,
-            stop_load_ratio=fr["stop_load_ratio"],
-            snapshots=fr["snapshots"],
-        )
+        try:
+            options = FractureOptions(**{key: fr[key] for key in FRACTURE_KEYS})
+        except InputError as exc:  # the types are the schema's: only values are left
+            raise self._err(f"fracture.{exc.param}", exc) from None
+        return dict(ft=ft, gf=gf, weibull=weibull, options=options)
 
     def solve_options(self) -> dict:
         """Keyword options of :func:`dvstatic.solve` from ``[solver]``."""

@@ -9,6 +9,7 @@ import dataclasses
 import logging
 from dataclasses import dataclass
 
+from ..crack.options import FractureOptions
 from ..errors import InputError
 from ..mesh.generators import DEFAULT_JITTER
 from ..report import CHECK_QUANTITIES
@@ -16,7 +17,7 @@ from ..solvers.options import SolveOptions
 
 log = logging.getLogger(__name__)
 
-__all__ = ["SceneError", "F", "SCHEMA", "SOLVER_KEYS", "reference_markdown"]
+__all__ = ["SceneError", "F", "SCHEMA", "SOLVER_KEYS", "FRACTURE_KEYS", "reference_markdown"]
 
 
 class SceneError(InputError):
@@ -268,15 +269,6 @@ SCHEMA: dict[str, F] = {
                 "fracture energy (energy per crack area): saw-tooth softening of cracked bonds; "
                 "omit for brittle bonds",
             ),
-            "max_events": F("int", "stop after this many events", default=1000),
-            "criterion": F(
-                "string",
-                "stress: normal stress on the bond's face (Rankine); tension: the bond's "
-                "tension (raised by compression along the face)",
-                default="stress",
-                choices=("stress", "tension"),
-            ),
-            "teeth": F("int", "saw-tooth steps of a cracked bond (with gf)", default=30),
             "weibull_m": F(
                 "number", "Weibull modulus of a random strength field (omit: uniform strength)"
             ),
@@ -286,15 +278,6 @@ SCHEMA: dict[str, F] = {
                 default=0.0,
             ),
             "seed": F("int", "seed of the random field", default=0),
-            "stop_load_ratio": F(
-                "number", "stop once the load falls below this fraction of the peak", default=0.01
-            ),
-            "snapshots": F(
-                "int",
-                "states kept for the VTU series (about; spread over the events run, always "
-                "the peak and the last)",
-                default=50,
-            ),
             "checks": F(
                 "tables",
                 "key numbers of the analysis printed (and written to the JSON) against a "
@@ -426,6 +409,22 @@ SOLVER_KEYS = {
     if f.metadata["scene"]
 }
 SCHEMA["solver"] = dataclasses.replace(SCHEMA["solver"], schema=_solver_schema())
+
+
+def _fracture_schema() -> dict[str, F]:
+    """The ``[fracture]`` table: the strengths and checks, and the options derived from
+    :class:`~dvstatic.crack.FractureOptions`."""
+    out = dict(SCHEMA["fracture"].schema)
+    for f in dataclasses.fields(FractureOptions):
+        meta = f.metadata
+        if meta["scene"]:
+            out[f.name] = F(meta["kind"], meta["doc"], default=f.default, choices=meta["choices"])
+    return out
+
+
+#: the keys of ``[fracture]`` that are options of :class:`~dvstatic.crack.FractureOptions`
+FRACTURE_KEYS = tuple(f.name for f in dataclasses.fields(FractureOptions) if f.metadata["scene"])
+SCHEMA["fracture"] = dataclasses.replace(SCHEMA["fracture"], schema=_fracture_schema())
 
 
 def reference_markdown() -> str:

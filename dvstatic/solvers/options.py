@@ -17,7 +17,14 @@ from .._checks import check_choice, check_int, check_positive
 from ..errors import InputError
 from ..linalg import AUTO_DIRECT_MAX_DOF
 
-__all__ = ["SOLVERS", "SolveOptions", "ALIASES", "options_markdown", "options_docstring"]
+__all__ = [
+    "SOLVERS",
+    "SolveOptions",
+    "ALIASES",
+    "option",
+    "options_markdown",
+    "options_docstring",
+]
 
 #: linear solvers / engines of ``solver=``
 SOLVERS = ("auto", "direct", "amg", "dynamic-relaxation", "petsc")
@@ -25,10 +32,16 @@ SOLVERS = ("auto", "direct", "amg", "dynamic-relaxation", "petsc")
 ALIASES = {"max_iter": "newton_maxiter"}
 
 
-def _option(default, doc: str, kind: str, choices=(), scene: bool = True, scene_key=None):
+def option(default, doc: str, kind: str, choices=(), scene: bool = True, scene_key=None):
+    """A field of an options dataclass with what the scene schema, the docstring and
+    the docs table are made from: ``doc`` (markdown), ``kind`` (a scene kind: string,
+    number, int, bool), ``choices``, whether the scene has it, and its scene key."""
     meta = {"doc": doc, "kind": kind, "choices": tuple(choices), "scene": scene}
     meta["scene_key"] = scene_key
     return field(default=default, metadata=meta)
+
+
+_option = option
 
 
 @dataclass(frozen=True)
@@ -184,22 +197,26 @@ def _unit_interval(name: str, value) -> float:
     return v
 
 
-def options_markdown() -> str:
-    """Markdown table of every option (name, default, meaning): docs/api.md holds it."""
+def options_markdown(cls=None, aliases=None) -> str:
+    """Markdown table of every option of ``cls`` (default :class:`SolveOptions`; name,
+    default, meaning): docs/api.md holds it."""
+    cls = SolveOptions if cls is None else cls
+    aliases = ALIASES if cls is SolveOptions and aliases is None else (aliases or {})
     lines = ["| option | default | meaning |", "|---|---|---|"]
-    for f in dataclasses.fields(SolveOptions):
+    for f in dataclasses.fields(cls):
         lines.append(f"| `{f.name}` | `{f.default!r}` | {f.metadata['doc']} |")
-    for old, new in ALIASES.items():
+    for old, new in aliases.items():
         lines.append(f"| `{old}` | | deprecated name of `{new}` |")
     return "\n".join(lines)
 
 
-def options_docstring(indent: str = "    ") -> str:
-    """numpydoc ``Parameters`` entries of every option (for ``dv.solve.__doc__``)."""
+def options_docstring(indent: str = "    ", cls=None) -> str:
+    """numpydoc ``Parameters`` entries of every option of ``cls`` (default
+    :class:`SolveOptions`; for ``dv.solve.__doc__``)."""
     import textwrap
 
     out = []
-    for f in dataclasses.fields(SolveOptions):
+    for f in dataclasses.fields(SolveOptions if cls is None else cls):
         kind = {"string": "str", "number": "float", "int": "int", "bool": "bool"}[
             f.metadata["kind"]
         ]

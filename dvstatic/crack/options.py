@@ -1,0 +1,119 @@
+"""The options of :func:`dvstatic.fracture`, listed once.
+
+:class:`FractureOptions` is the single source, as :class:`~dvstatic.SolveOptions` is for
+``dv.solve``: ``dv.fracture``'s option keywords and their docstring, the options of the
+scene's ``[fracture]`` table and the option table in ``docs/api.md`` are derived from its
+fields. The strengths (``ft``, ``gf``, ``weibull``) are the material's and stay keywords
+of :func:`dvstatic.fracture` itself.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import numbers
+from dataclasses import dataclass
+
+from .._checks import check_choice, check_int, check_real
+from ..errors import InputError
+from ..solvers.options import option
+from .criterion import CRITERIA
+
+__all__ = ["FractureOptions", "MAX_RANK"]
+
+#: largest low-rank update (columns) before the stiffness is factorised afresh
+MAX_RANK = 3000
+
+
+@dataclass(frozen=True)
+class FractureOptions:
+    """How a fracture analysis runs (validated on construction; see each field's doc)."""
+
+    max_events: int = option(1000, "stop after this many events (>= 1)", "int")
+    criterion: str = option(
+        "stress",
+        "what an intact bond compares with its strength: `stress`, the normal stress across "
+        "its Voronoi face (a Rankine criterion, unaffected by compression along the face), "
+        "or `tension`, its tension (which compression along the face raises: under tension "
+        "`s` and compression `3 s` it cracks at about `ft / 2.6`)",
+        "string",
+        CRITERIA,
+    )
+    teeth: int = option(
+        30, "saw-tooth steps of a cracked bond's softening (with `gf`; 2 to 1000)", "int"
+    )
+    stop_load_ratio: float = option(
+        0.01,
+        "stop once the load falls below this fraction of the peak, in [0, 1) (0: never)",
+        "number",
+    )
+    fragment: float = option(
+        0.01,
+        "a piece no longer held by the supports stops the analysis if it carries load or "
+        "has more than this fraction of the nodes, in [0, 1]; smaller unloaded fragments "
+        "are left hanging",
+        "number",
+    )
+    max_rank: int = option(
+        240,
+        f"largest low-rank update (columns, 0 to {MAX_RANK}) before the stiffness is "
+        "factorised afresh (0: refactorise at every event, the reference path)",
+        "int",
+    )
+    snapshots: int = option(
+        50,
+        "about this many states kept for the VTU series (>= 1), spread over the events "
+        "actually run; the peak and the last state are always among them",
+        "int",
+    )
+    snapshot_every: int | None = option(
+        None,
+        "keep the state every this many events instead (>= 1; and the peak and the last)",
+        "int",
+        scene=False,
+    )
+    progress: bool = option(False, "show a progress bar of the events (tqdm)", "bool", scene=False)
+
+    def __post_init__(self) -> None:
+        check_int("max_events", self.max_events, minimum=1)
+        check_choice("criterion", self.criterion, CRITERIA)
+        check_int("teeth", self.teeth, minimum=2, maximum=1000)
+        check_int("max_rank", self.max_rank, minimum=0, maximum=MAX_RANK)
+        check_int("snapshots", self.snapshots, minimum=1)
+        if self.snapshot_every is not None:
+            check_int("snapshot_every", self.snapshot_every, minimum=1)
+        _fraction("stop_load_ratio", self.stop_load_ratio, closed=False)
+        _fraction("fragment", self.fragment, closed=True)
+        if not isinstance(self.progress, bool):
+            raise TypeError(f"progress must be True or False, got {self.progress!r}")
+
+    @classmethod
+    def from_kwargs(cls, base: FractureOptions | None = None, **kwargs) -> FractureOptions:
+        """Options from keywords, on top of ``base``.
+
+        Raises
+        ------
+        TypeError
+            An unknown keyword (the message lists the accepted ones).
+        """
+        names = {f.name for f in dataclasses.fields(cls)}
+        unknown = sorted(set(kwargs) - names)
+        if unknown:
+            raise TypeError(
+                f"unknown fracture option(s) {', '.join(map(repr, unknown))}; accepted: "
+                + ", ".join(sorted(names))
+            )
+        if base is not None and not isinstance(base, cls):
+            raise TypeError(f"options must be a FractureOptions, got {type(base).__name__}")
+        return dataclasses.replace(base or cls(), **kwargs)
+
+
+def _fraction(name: str, value, closed: bool) -> float:
+    """A finite number in [0, 1] (``closed``) or [0, 1)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        check_real(name, value)  # the TypeError
+    v = float(value)
+    if not math.isfinite(v) or v < 0 or (v > 1 if closed else v >= 1):
+        bound = "[0, 1]" if closed else "[0, 1)"
+        raise InputError(f"{name} must lie in {bound}, got {value!r}", name)
+    return v
