@@ -570,3 +570,31 @@ def test_fracture_options_drive_the_signature_the_scene_and_the_docs():
             assert SCHEMA["fracture"].schema[f.name].default == f.default
     api = (Path(__file__).resolve().parents[1] / "docs" / "api.md").read_text()
     assert options_markdown(dv.FractureOptions) in api
+
+
+def test_a_new_criterion_is_one_registered_class():
+    """The event loop only calls the protocol: a criterion registered under a new name
+    is accepted by dv.fracture and breaks where its thresholds say (here the tension
+    criterion at half the strength: the first event at half the load factor)."""
+    from dvstatic.crack.criteria import REGISTRY, register
+    from dvstatic.crack.criteria.tension import Tension
+
+    class HalfTension(Tension):
+        name = "half-tension"
+
+        def thresholds(self, s_tension, ftb, factors):
+            return 0.5 * s_tension
+
+    register(HalfTension)
+    try:
+        sup, loads = pulled()
+        model = dv.DV(plate(0.1), E=E, nu=NU)
+        full = dv.fracture(model, sup, loads, ft=FT, criterion="tension", max_events=1)
+        half = dv.fracture(model, sup, loads, ft=FT, criterion="half-tension", max_events=1)
+        e0, e1 = full.events[0], half.events[0]
+        assert e1.bond == e0.bond
+        assert e1.load_factor == pytest.approx(0.5 * e0.load_factor, rel=1e-12)
+    finally:
+        REGISTRY.pop("half-tension")
+    with pytest.raises(dv.InputError, match="half-tension"):
+        dv.fracture(model, sup, loads, ft=FT, criterion="half-tension")

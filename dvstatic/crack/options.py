@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from .._checks import check_choice, check_int, check_real
 from ..errors import InputError
 from ..solvers.options import option
-from .criterion import CRITERIA
+from .criteria import CRITERIA, REGISTRY
 
 __all__ = ["FractureOptions", "MAX_RANK"]
 
@@ -76,7 +76,7 @@ class FractureOptions:
 
     def __post_init__(self) -> None:
         check_int("max_events", self.max_events, minimum=1)
-        check_choice("criterion", self.criterion, CRITERIA)
+        check_choice("criterion", self.criterion, tuple(REGISTRY))  # with any registered since
         check_int("teeth", self.teeth, minimum=2, maximum=1000)
         check_int("max_rank", self.max_rank, minimum=0, maximum=MAX_RANK)
         check_int("snapshots", self.snapshots, minimum=1)

@@ -1,7 +1,7 @@
 """Event-driven fracture: sequentially linear analysis (SLA) with factorisation updates.
 
 Each event solves the damaged lattice for the reference loads (one unit of the load
-factor), finds the bond whose criterion (:mod:`.criterion`) is the largest fraction of
+factor), finds the bond whose criterion (:mod:`.criteria`) is the largest fraction of
 its current strength, scales the loads so that this bond reaches its strength exactly,
 records the state and then softens or removes that bond. Every recorded state is an
 exact equilibrium of the linear lattice at its load factor; snap-backs appear in the
@@ -26,7 +26,7 @@ from ..problem import constraints, load_vector
 from ..problem.loads import nodal_forces
 from ..problem.select import as_list
 from ..solvers.options import options_docstring
-from .criterion import Measure, per_bond, strengths
+from .criteria import criterion_for, per_bond
 from .options import FractureOptions
 from .pieces import Pieces, bond_triangles
 from .result import Event, FractureResult, Snapshot
@@ -141,12 +141,12 @@ def fracture(
     t_start = time.perf_counter()
     dofs, values, f, control, ref = _reference(model, supports, loads)
     sp_ = _split(model)
-    measure = Measure(model, sp_, opts.criterion)
-    s0, s_tension = strengths(model, measure, ft, weibull, timings, dofs)
+    criterion = criterion_for(opts.criterion, model, sp_)
+    s0, s_tension = criterion.prepare(model, ft, weibull, timings, dofs)
     energy = None if gf is None else _energies(model, gf, s_tension)
     _warn_rows(model.mesh)
     return _run(
-        model, sp_, measure, s0, energy, (dofs, values, f, control, ref), timings, t_start, opts
+        model, sp_, criterion, s0, energy, (dofs, values, f, control, ref), timings, t_start, opts
     )
 
 
@@ -267,14 +267,6 @@ class _Bonds:
         if not had_steps:
             self.steps.pop(e, None)
 
-    def critical(self, stress, elongation):
-        """The bond closest to its threshold and the load factor that brings it there."""
-        value = np.where(self.d >= 1.0, stress, elongation)
-        ratio = np.where(self.d > 0, value / self.threshold, 0.0)
-        ratio[~(ratio > 0)] = 0.0
-        e = int(np.argmax(ratio))
-        return e, (1.0 / ratio[e] if ratio[e] > 0 else np.inf)
-
     def advance(self, e: int, peak: float) -> bool:
         """Soften or remove bond ``e`` cracking at elongation ``peak``; True if removed."""
         if self.d[e] >= 1.0:
@@ -327,9 +319,9 @@ class _Kept:
 class _Analysis:
     """The event loop of :func:`fracture`: state, one event, the result."""
 
-    def __init__(self, model, sp_, measure, s0, energy, problem, opts):
+    def __init__(self, model, sp_, criterion, s0, energy, problem, opts):
         self.dofs, self.values, self.f, self.control, self.ref = problem
-        self.model, self.sp, self.measure, self.s0, self.opts = model, sp_, measure, s0, opts
+        self.model, self.sp, self.criterion, self.s0, self.opts = model, sp_, criterion, s0, opts
         self.bonds = _Bonds(s0, model.operator.spring, energy, opts.teeth)
         self.solver = UpdatedSolver(
             model.mesh, sp_, self.dofs, self.values, self.f, max_rank=opts.max_rank
@@ -358,8 +350,7 @@ class _Analysis:
         bonds, x = self.bonds, self.x
         w, g = self.sp.factors(bonds.d)
         intact = np.all(bonds.d[self.sp.tri_bonds] >= 1.0, axis=1).astype(float)
-        elongation = self.measure.elongation(x)
-        e, lam = bonds.critical(self.measure(x, w, g, intact), elongation)
+        e, lam, elongation = self.criterion.critical(x, w, g, intact, bonds.d, bonds.threshold)
         if not np.isfinite(lam):
             return "no_tension", "no unbroken bond is loaded towards its strength"
         saved = bonds.save(e)
@@ -433,9 +424,9 @@ class _Analysis:
         )
 
 
-def _run(model, sp_, measure, s0, energy, problem, timings, t_start, opts) -> FractureResult:
+def _run(model, sp_, criterion, s0, energy, problem, timings, t_start, opts) -> FractureResult:
     """The event loop (see :func:`fracture`); Ctrl-C keeps the events so far."""
-    run = _Analysis(model, sp_, measure, s0, energy, problem, opts)
+    run = _Analysis(model, sp_, criterion, s0, energy, problem, opts)
     n = opts.max_events
     reason, message = "max_events", f"stopped after max_events = {n} events"
     t0 = time.perf_counter()

@@ -1,0 +1,128 @@
+"""What the criteria share: material properties per bond, and every bond's response to
+the three unit uniform stresses (its tension and its patch stress), from which the
+criteria make their strengths (docs/fracture.md)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+
+import numpy as np
+
+from ...errors import InputError, UnknownRegionError
+from ...lattice import VoronoiModel
+from ...linalg import ConstrainedSystem, DirectSolver
+from ...mesh import mesh_dof_order
+from ..strength import uniform_stress_loads
+
+__all__ = ["positive", "per_bond", "voigt", "responses"]
+
+
+def positive(value, name: str) -> None:
+    """Refuse ``value`` unless it is a finite number > 0 (numpy scalars accepted)."""
+    ok = isinstance(value, (int, float, np.floating, np.integer)) and not isinstance(value, bool)
+    if not ok or not math.isfinite(float(value)) or float(value) <= 0:
+        raise InputError(f"{name} must be a finite number > 0, got {value!r}", name)
+
+
+def per_bond(model: VoronoiModel, value, name: str) -> np.ndarray:
+    """A material property per bond: a number, or {region: number} over a default
+    (``None`` key or ``"default"``); a bond between regions takes the smaller value."""
+    mesh = model.mesh
+    if isinstance(value, Mapping):
+        values = dict(value)
+        default = values.pop(None, values.pop("default", None))
+        if default is None:
+            raise InputError(f"{name} as a mapping needs a 'default' value", name)
+        positive(default, name)
+        tri = np.full(mesh.n_triangles, float(default))
+        for region, v in values.items():
+            if region not in mesh.regions:
+                raise UnknownRegionError(
+                    f"{name}: unknown region {region!r}; the mesh has {sorted(mesh.regions)}",
+                    name,
+                    region,
+                )
+            positive(v, f"{name}[{region!r}]")
+            tri[mesh.regions[region]] = float(v)
+    else:
+        positive(value, name)
+        tri = np.full(mesh.n_triangles, float(value))
+    out = np.full(mesh.n_bonds, np.inf)
+    np.minimum.at(out, mesh.topology.tri_bonds.ravel(), np.repeat(tri, 3))
+    return out
+
+
+def voigt(s: np.ndarray) -> np.ndarray:
+    """(xx, yy, xy) of stresses (n, 2, 2)."""
+    return np.stack([s[:, 0, 0], s[:, 1, 1], s[:, 0, 1]], axis=1)
+
+
+def _uniform_response(model, length, area, dofs=None):
+    """Tensions (3 x (n_bonds,)) and patch stresses (3 x (stress, covered)) of ``model``
+    under the unit uniform stresses xx, yy, xy: boundary tractions, and at the problem's
+    prescribed ``dofs`` the uniform state's displacement (so that a bond at a support
+    or a grip answers as it does in the problem: the stress at a support is the
+    stress); without ``dofs``, three pinned dofs."""
+    from ...lattice.damage import split
+
+    mesh = model.mesh
+    sp_ = split(model)
+    w, g = sp_.factors(np.ones(mesh.n_bonds))
+    x = mesh.points
+    if dofs is None:
+        p1 = int(np.argmax(np.hypot(*(x - x[0]).T)))
+        dd = x[p1] - x[0]
+        dofs = np.array(sorted([0, 1, 2 * p1 + (1 if abs(dd[0]) >= abs(dd[1]) else 0)]))
+        affine = [np.zeros(3)] * 3
+    else:
+        E, nu = model.material.in_plane
+        affine = [(x @ strain.T).reshape(-1)[dofs] for strain in _unit_strains(E, nu)]
+    system = ConstrainedSystem(sp_.stiffness(mesh, w, g), dofs)
+    engine = DirectSolver(system.A, order=mesh_dof_order(mesh))
+    loads = uniform_stress_loads(mesh, model.t)
+    us = [engine.apply(system.rhs(f, v)) for f, v in zip(loads, affine, strict=True)]
+    forces = [sp_.forces(u, w, g) for u in us]
+    tens = [sp_.tension(u, w, g, f) for u, f in zip(us, forces, strict=True)]
+    patches = [
+        sp_.patch_stress(u, w, g, length, area, None, f) for u, f in zip(us, forces, strict=True)
+    ]
+    return tens, patches
+
+
+def _unit_strains(E: float, nu: float) -> list[np.ndarray]:
+    """The strains (2, 2) of the unit stresses xx, yy, xy under the in-plane law."""
+    return [
+        np.array([[1.0, 0.0], [0.0, -nu]]) / E,
+        np.array([[-nu, 0.0], [0.0, 1.0]]) / E,
+        np.array([[0.0, 1.0 + nu], [1.0 + nu, 0.0]]) / E,
+    ]
+
+
+def responses(model, length, area, dofs=None):
+    """The uniform-stress response of every bond. With several materials a uniform
+    traction does not give a uniform stress, so each material's bonds take the response
+    of the mesh made entirely of that material (a bond between materials takes the one
+    of its first triangle)."""
+    import dataclasses
+
+    if len(model.all_materials) == 1:
+        return _uniform_response(model, length, area, dofs)
+    from ..pieces import bond_triangles
+
+    mat = model.material_of_triangle[bond_triangles(model.mesh)[:, 0]]
+    tens = [np.zeros(model.mesh.n_bonds) for _ in range(3)]
+    patches = [
+        (np.zeros((model.mesh.n_bonds, 2, 2)), np.zeros(model.mesh.n_bonds, bool)) for _ in range(3)
+    ]
+    for k, material in enumerate(model.all_materials):
+        sel = mat == k
+        if not sel.any():
+            continue
+        alone = dataclasses.replace(model, E=material.E, nu=material.nu, materials=None)
+        t_k, p_k = _uniform_response(alone, length, area, dofs)
+        for c in range(3):
+            tens[c][sel] = t_k[c][sel]
+            patches[c][0][sel] = p_k[c][0][sel]
+            patches[c][1][sel] = p_k[c][1][sel]
+    return tens, patches

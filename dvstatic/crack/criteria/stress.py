@@ -1,0 +1,73 @@
+"""``criterion="stress"`` (the default): a Rankine criterion on each bond's Voronoi face."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..strength import principal_response
+from .base import Criterion, register
+from .responses import voigt
+
+__all__ = ["Stress"]
+
+
+@register
+class Stress(Criterion):
+    """The normal stress across the bond's face against ``ft``.
+
+    Away from damage, ``H_nn sigma_nn``, the normal stress across the face times the
+    bond's tension per unit normal stress ``H_nn``. ``sigma`` is the mean stress of the
+    triangles at the bond's two end nodes, corrected by the inverse of that patch's
+    response to uniform stress (so that it is exact under any uniform stress). Next to
+    damage (in a damaged triangle), the bond's own tension without the part that stress
+    along its face causes, ``T_e - (H_e : sigma - H_nn sigma_nn)``: the tension resolves
+    the stress concentration at a crack tip that a patch mean would smear, and damaged
+    triangles are left out of ``sigma`` so that the crack does not shield the bonds
+    ahead of it. Under uniform stress both are ``H_nn sigma_nn``. Slivers whose tension
+    hardly follows the normal stress (``H_nn < lambda_max(H_e) / 4``) use their tension.
+    """
+
+    name = "stress"
+
+    def set_response(self, h: np.ndarray, patches) -> None:
+        """Tensions (n_bonds, 3) and patch stresses (3 x (stress, covered)) under the unit
+        uniform stresses xx, yy, xy."""
+        self.h = h
+        lam = principal_response([h[:, 0], h[:, 1], h[:, 2]])
+        p = np.stack([voigt(s) for s, _ in patches], axis=2)  # (xx, yy, xy) -> patch
+        ok = np.linalg.cond(p) < 1e3
+        self.unbias = np.broadcast_to(np.eye(3), p.shape).copy()
+        self.unbias[ok] = np.linalg.inv(p[ok])
+        #: slivers, and bonds whose patch is degenerate, use their tension
+        self.use_tension = (self.h_nn < 0.25 * lam) | ~ok | ~patches[0][1]
+
+    @property
+    def h_nn(self) -> np.ndarray:
+        n, h = self.n, self.h
+        return h[:, 0] * n[:, 0] ** 2 + h[:, 1] * n[:, 1] ** 2 + h[:, 2] * n[:, 0] * n[:, 1]
+
+    def thresholds(self, s_tension, ftb, factors):
+        scale = ftb * self.h_nn * (1.0 if factors is None else factors)
+        return np.where(self.use_tension, s_tension, scale)
+
+    def __call__(self, x, w, g, intact=None) -> np.ndarray:
+        f = self.sp.forces(x, w, g)
+        t = self.sp.tension(x, w, g, f)
+        s, covered = self.sp.patch_stress(x, w, g, self.length, self.area, intact, f)
+        v = np.einsum("eij,ej->ei", self.unbias, voigt(s))
+        n = self.n
+        normal = self.h_nn * (
+            v[:, 0] * n[:, 0] ** 2 + v[:, 1] * n[:, 1] ** 2 + 2 * v[:, 2] * n[:, 0] * n[:, 1]
+        )
+        if intact is None or intact.all():
+            return np.where(covered & ~self.use_tension, normal, t)
+        h = self.h
+        along = h[:, 0] * v[:, 0] + h[:, 1] * v[:, 1] + h[:, 2] * v[:, 2] - normal
+        m = np.where(self._near_damage(intact), t - along, normal)
+        return np.where(covered & ~self.use_tension, m, t)
+
+    def _near_damage(self, intact: np.ndarray) -> np.ndarray:
+        """Bonds of a damaged triangle (the damaged bond's neighbours), (n_bonds,) bool."""
+        hit = np.zeros(len(self.bonds), dtype=bool)
+        hit[self.sp.tri_bonds[intact < 1].ravel()] = True
+        return hit

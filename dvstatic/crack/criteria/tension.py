@@ -1,0 +1,22 @@
+"""``criterion="tension"``: a bond breaks when its tension reaches its strength."""
+
+from __future__ import annotations
+
+from .base import Criterion, register
+
+__all__ = ["Tension"]
+
+
+@register
+class Tension(Criterion):
+    """The bond's tension ``T_e`` against its tension-based strength (which compression
+    along the face raises: under tension ``s`` and compression ``3 s`` it cracks at
+    about ``ft / 2.6``)."""
+
+    name = "tension"
+
+    def thresholds(self, s_tension, ftb, factors):
+        return s_tension
+
+    def __call__(self, x, w, g, intact=None):
+        return self.sp.tension(x, w, g, self.sp.forces(x, w, g))
