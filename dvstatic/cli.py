@@ -334,7 +334,7 @@ def _write_outputs(
         if o["vtu"]:
             written.append(io.write_vtu(stage / f"{sc.name}.vtu", sol, fe=fe).name)
             written.append(io.write_bonds_vtu(stage / f"{sc.name}_bonds.vtu", sol).name)
-        view = io.picture_view(sol, o["view"])
+        view = io.picture_view(sol, o["view"], method, o["field"])
         scale = o["scale"] or io.default_scale(sol, view)
         if o["png"]:
             png = io.write_png(
@@ -371,6 +371,7 @@ def _write_outputs(
         if o["json"]:
             written.append(io.write_json(stage / f"{sc.name}.json", data).name)
         final = folder.commit(written, owner=_owner(sc))
+    args.written = final  # what a Ctrl-C from here on leaves behind
     return data, final
 
 
@@ -554,7 +555,12 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: {exc.strerror or exc}: {exc.filename or ''}".rstrip(": "), file=sys.stderr)
         return 2
     except KeyboardInterrupt as exc:
-        if not getattr(exc, "dvstatic_reported", False):
+        written = getattr(args, "written", None)
+        if args.command != "run" or getattr(exc, "dvstatic_reported", False):
+            print("interrupted", file=sys.stderr)
+        elif written:
+            print(f"interrupted; the outputs were written: {written[0].parent}", file=sys.stderr)
+        else:
             print(
                 "interrupted before any output was written: files already in the output "
                 "folder are as they were",

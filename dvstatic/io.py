@@ -275,13 +275,18 @@ def default_scale(solution, view=None) -> float:
 SMALL_PART = 0.5
 
 
-def picture_view(solution, view=None) -> tuple[float, float, float, float]:
+def picture_view(
+    solution, view=None, stress: str | None = None, field: str = "|u|"
+) -> tuple[float, float, float, float]:
     """The region a picture shows, (x0, x1, y0, y1) (length).
 
     ``view`` as given (four numbers), ``"body"`` for the whole body, or None: the holes
     (inner boundary loops), else the parts carrying surface or point loads, framed with
     two of their sizes around them where that frame is less than :data:`SMALL_PART` of
-    the body's box; the whole body otherwise.
+    the body's box *and* holds what the picture is about: the nodes where the coloured
+    ``field`` and the von Mises stress peak (``stress``: the recovery; away from point
+    loads). The whole body otherwise (a loaded end of a cantilever is small, but its
+    stresses peak at the clamp).
     """
     x = solution.model.mesh.points
     lo, hi = x.min(axis=0), x.max(axis=0)
@@ -295,12 +300,30 @@ def picture_view(solution, view=None) -> tuple[float, float, float, float]:
                 f"view must be (x0, x1, y0, y1) with x0 < x1, y0 < y1, got {view}", "view"
             )
         return v
+    peaks = None
     for nodes in (_hole_nodes(solution.model.mesh), _surface_loaded_nodes(solution)):
-        if len(nodes):
-            a, b = _frame(x, x[nodes])
-            if not (np.allclose(a, lo) and np.allclose(b, hi)):
-                return float(a[0]), float(b[0]), float(a[1]), float(b[1])
+        if len(nodes) == 0:
+            continue
+        a, b = _frame(x, x[nodes])
+        if np.allclose(a, lo) and np.allclose(b, hi):
+            continue
+        box = (float(a[0]), float(b[0]), float(a[1]), float(b[1]))
+        peaks = _peak_nodes(solution, stress, field) if peaks is None else peaks
+        if _inside(x[peaks], box).all():
+            return box
     return body
+
+
+def _peak_nodes(solution, stress: str | None, field: str) -> np.ndarray:
+    """The nodes where ``field`` and the von Mises stress peak (in magnitude), away from
+    point loads."""
+    away = ~near_point_loads(solution)
+    out = []
+    for name in dict.fromkeys((field, "von_mises")):
+        f = np.abs(nodal_field(solution, name, stress))
+        f[~away] = -np.inf
+        out.append(int(np.argmax(f)))
+    return np.array(out)
 
 
 def _frame(x: np.ndarray, part: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -324,12 +347,13 @@ POINT_LOAD_SPACINGS = 6.0
 
 
 def near_point_loads(solution) -> np.ndarray:
-    """Nodes within :data:`POINT_LOAD_SPACINGS` local spacings of a point load, shape
-    (N,) bool."""
+    """Nodes within :data:`POINT_LOAD_SPACINGS` local spacings (the mean bond length at
+    the loaded node) of a point load, shape (N,) bool."""
     from scipy.spatial import cKDTree
 
     from .problem.loads import PointLoad
     from .problem.select import select_nodes
+    from .stress.fit import local_spacing
 
     mesh = solution.model.mesh
     out = np.zeros(mesh.n_points, dtype=bool)
@@ -341,9 +365,10 @@ def near_point_loads(solution) -> np.ndarray:
     if not nodes:
         return out
     nodes = np.unique(np.concatenate(nodes))
-    h = float(np.sqrt(2.3 * np.mean(mesh.triangle_areas)))  # equilateral: area 0.433 h^2
-    hits = cKDTree(mesh.points).query_ball_point(mesh.points[nodes], POINT_LOAD_SPACINGS * h)
-    out[np.unique(np.concatenate([np.asarray(k, dtype=np.int64) for k in hits]))] = True
+    radius = POINT_LOAD_SPACINGS * local_spacing(mesh)[nodes]
+    tree = cKDTree(mesh.points)
+    for node, r in zip(nodes, radius, strict=True):
+        out[tree.query_ball_point(mesh.points[node], r)] = True
     return out
 
 
@@ -407,8 +432,9 @@ def write_png(
     ``view`` is the region shown (:func:`picture_view`: default the whole body, or its
     holes or loaded parts when they are small in it; ``"body"``; or (x0, x1, y0, y1)),
     and the colour range is that of the nodes in it. ``scale`` magnifies the
-    displacement (default: the largest displacement in view drawn as 10 % of the view;
-    1 for nonlinear solutions). The x label states the magnification; the colour range
+    displacement (default: :func:`default_scale`, the largest displacement as 10 % of
+    the body, or in a framed view as 10 % of the framed part; 1 for nonlinear
+    solutions). The x label states the magnification; the colour range
     is clipped to robust percentiles where a few nodes would take all of it (the colour
     bar says so). Material interfaces are drawn as lines.
 
@@ -424,17 +450,23 @@ def write_png(
     if field == "szz" and solution.model.plane == "stress":
         raise InputError("szz is zero in plane stress: pick another field", "field")
     f = nodal_field(solution, field, stress)
-    box = picture_view(solution, view)
+    box = picture_view(solution, view, stress, field)
+    inside = _inside(mesh.points, box)
+    if not inside.any():
+        raise InputError(f"view {list(box)} holds no node of the body", "view")
     if scale is None:
         scale = default_scale(solution, box)
     drawn = mesh.points + scale * solution.u
-    inside = _inside(mesh.points, box)
     whole = bool(inside.all())
     frame = drawn if whole else drawn[inside]
     fig, axes = plot.figure(1, 1, figure_size(frame))
     ax = axes[0, 0]
-    shown = inside & ~near_point_loads(solution)
-    plot.draw_deformed(ax, mesh, solution.u, scale=scale, field=f, label=field, shown=shown)
+    near = near_point_loads(solution)
+    shown = inside & ~near if (inside & ~near).any() else inside
+    note = "the nodes in view, away from point loads" if near.any() else "the nodes in view"
+    plot.draw_deformed(
+        ax, mesh, solution.u, scale=scale, field=f, label=field, shown=shown, shown_is=note
+    )
     plot.draw_interfaces(ax, mesh, solution.model.material_of_triangle, drawn)
     if not whole:  # the deformed shape in view, with a margin
         lo, hi = frame.min(axis=0), frame.max(axis=0)

@@ -72,6 +72,7 @@ def draw_deformed(
     cmap: str = "viridis",
     edges: bool = True,
     shown: np.ndarray | None = None,
+    shown_is: str = "the nodes shown",
 ):
     """Deformed mesh ``x + scale u`` coloured by a nodal ``field`` (default ``|u|``).
 
@@ -98,7 +99,7 @@ def draw_deformed(
     if clipped:
         label += " (colours clipped to the 1-99 % percentiles)"
     elif extend != "neither":
-        label += " (range of the nodes in view, away from point loads)"
+        label += f" (range of {shown_is})"
     plt.colorbar(tpc, ax=ax, label=label, shrink=0.8, extend=extend)
     ax.set_aspect("equal")
     return ax

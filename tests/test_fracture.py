@@ -598,3 +598,16 @@ def test_a_new_criterion_is_one_registered_class():
         REGISTRY.pop("half-tension")
     with pytest.raises(dv.InputError, match="half-tension"):
         dv.fracture(model, sup, loads, ft=FT, criterion="half-tension")
+
+
+def test_control_displacement_is_the_spread_and_a_translation_is_refused():
+    from dvstatic.crack.sla import _displacement_measure, _load_measure
+
+    dofs = np.array([1, 3, 5, 7])
+    assert _displacement_measure(dofs, np.array([1.0, 1.0, 2.0, 2.0])) == 1.0  # d and 2 d
+    assert _displacement_measure(dofs, np.array([0.0, 0.0, -0.5, 0.5])) == 1.0
+    with pytest.raises(dv.InputError, match="only translate"):
+        _displacement_measure(dofs, np.array([1.0, 1.0, 1.0, 1.0]))
+    mesh = dv.mesh.disc(1.0, 0.1)
+    pair = [dv.PointLoad(at=(0, 1), value=(0, -1.0)), dv.PointLoad(at=(0, -1), value=(0, 1.001))]
+    assert _load_measure(mesh, pair, 1.0) == pytest.approx(1.0005)  # one side, not 2P

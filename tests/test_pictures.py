@@ -25,7 +25,7 @@ def _hole_plate(radius: float):
 
 
 def test_a_small_hole_is_framed_and_a_large_one_is_not():
-    small = io.picture_view(_hole_plate(1.0))
+    small = io.picture_view(_hole_plate(1.0), field="sxx")  # the peak at the hole
     assert small == pytest.approx((5.0, 15.0, 5.0, 15.0), abs=0.3)  # 2.5 diameters around it
     assert io.picture_view(_hole_plate(4.0)) == pytest.approx((0, 20, 0, 20))
     assert io.picture_view(_hole_plate(1.0), "body") == pytest.approx((0, 20, 0, 20))
@@ -39,7 +39,7 @@ def test_the_colour_range_is_that_of_the_nodes_in_view(tmp_path, monkeypatch):
     real = plot.robust_range
     monkeypatch.setattr(plot, "robust_range", lambda f: seen.setdefault("n", len(f)) and real(f))
     io.write_png(tmp_path / "a.png", sol, field="sxx")
-    inside = io._inside(sol.model.mesh.points, io.picture_view(sol))
+    inside = io._inside(sol.model.mesh.points, io.picture_view(sol, field="sxx"))
     assert seen["n"] == inside.sum() < sol.model.mesh.n_points
 
 
@@ -174,3 +174,24 @@ def test_a_load_within_a_bad_box_names_the_key(within, match, tmp_path):
         sc = dv.scene.load(scene)
         sc.build_loads(sc.build_mesh())
     assert err.value.key == "loads[0].within"
+
+
+def test_a_loaded_end_is_not_framed_when_the_stress_peaks_elsewhere():
+    """A cantilever's loaded tip is small, but its stresses peak at the clamp: the whole
+    beam is shown. A small hole whose frame misses the largest displacement is not
+    framed either."""
+    mesh = dv.mesh.rectangle(10.0, 0.5, 0.05)
+    sol = dv.solve(dv.DV(mesh, 1e4, 0.3), dv.Fix("left"), dv.Traction("right", (0.0, -1.0)))
+    assert io.picture_view(sol) == pytest.approx((0, 10, 0, 0.5))
+    holes = [dv.domain.Circle((1.0, 1.0), 0.15, "bolt")]
+    mesh = dv.mesh.rectangle(10.0, 2.0, 0.1, holes=holes)
+    sol = dv.solve(dv.DV(mesh, 1e4, 0.3), dv.Fix("left"), dv.Traction("top", (0.0, -1.0)))
+    assert io.picture_view(sol) == pytest.approx((0, 10, 0, 2))
+
+
+def test_a_view_without_nodes_is_refused_before_the_solve(tmp_path, capsys):
+    args = ["run", str(EXAMPLES / "uniaxial.toml"), "--out", str(tmp_path / "o"), "-q"]
+    assert cli.main([*args, "--set", "output.view=[5, 6, 5, 6]"]) == 2
+    assert "output.view" in capsys.readouterr().err and not (tmp_path / "o").exists()
+    with pytest.raises(dv.InputError, match="holds no node"):
+        io.write_png(tmp_path / "a.png", _hole_plate(1.0), view=(30, 31, 30, 31))

@@ -43,6 +43,9 @@ EQUILIBRIUM_TOL = 1e-10
 #: average (Buffon: sum_e r_e l_e |sin theta_e| / A with sum_e r_e l_e = 2 A and the mean
 #: |sin| 2 / pi): each bond gets this share of gf times its face
 BUFFON = np.pi / 4
+#: loads whose resultants sum to less than this fraction of the sum of their sizes
+#: balance each other (the load is then the force on one side)
+BALANCED = 1e-2
 #: secant stiffness (relative to the initial one) below which the body is a mechanism
 MECHANISM = 1e-6
 
@@ -67,12 +70,26 @@ def _reference(model, supports, loads):
 
 def _displacement_measure(dofs, values) -> float:
     """The control displacement per unit load factor: the largest spread of the
-    prescribed values of one component, zero included (a fixed side and a moved side:
-    the moved value; two sides moved apart by +-d/2: d)."""
+    prescribed values of one component (a fixed side and a moved side: the moved value;
+    two sides moved apart by +-d/2, or to d and 2 d: d).
+
+    Raises
+    ------
+    InputError
+        If the prescribed values only translate the body (no spread).
+    """
     spread = 0.0
     for c in (0, 1):
-        v = np.append(values[dofs % 2 == c], 0.0)
-        spread = max(spread, float(v.max() - v.min()))
+        v = values[dofs % 2 == c]
+        if len(v):
+            spread = max(spread, float(v.max() - v.min()))
+    if not spread > 0:
+        raise InputError(
+            "the prescribed displacements only translate the body (every prescribed value "
+            "of a component is the same): nothing deforms it; fix one side (0) and move "
+            "the other",
+            "supports",
+        )
     return spread
 
 
@@ -80,9 +97,10 @@ def _load_measure(mesh, loads, thickness) -> float:
     """The load per unit load factor: the resultant of one side.
 
     A load object whose own resultant vanishes (a pressure in a hole) counts half its
-    total nodal force; loads whose resultants balance each other (two opposite point
-    loads or strips on a disc) count half the sum of their resultants, the force on one
-    side; otherwise the resultants add up (the supports react).
+    total nodal force; loads whose resultants balance each other to :data:`BALANCED`
+    of their sum (two opposite point loads or strips on a disc, also on a mesh that is
+    not quite symmetric) count half the sum of their resultants, the force on one side;
+    otherwise the resultants add up (the supports react).
     """
     own, resultants = 0.0, []
     for load in loads:
@@ -97,7 +115,7 @@ def _load_measure(mesh, loads, thickness) -> float:
         return own
     r = np.array(resultants)
     size = float(np.hypot(r[:, 0], r[:, 1]).sum())
-    balanced = np.hypot(*r.sum(axis=0)) <= 1e-6 * size
+    balanced = np.hypot(*r.sum(axis=0)) <= BALANCED * size
     return own + (0.5 * size if balanced else size)
 
 

@@ -211,6 +211,12 @@ class Scene:
                 snap_point(mesh, np.asarray(point, dtype=float).reshape(1, 2))
             except InputError as exc:
                 raise SceneError(self.path, key, str(exc)) from None
+        v = o["view"]
+        if v is not None:
+            x = mesh.points
+            inside = (x[:, 0] >= v[0]) & (x[:, 0] <= v[1]) & (x[:, 1] >= v[2]) & (x[:, 1] <= v[3])
+            if not inside.any():
+                raise SceneError(self.path, "output.view", f"{v} holds no node of the mesh")
         for i, name in enumerate(o["part_stress"]):
             if name not in mesh.parts:
                 known = ", ".join(repr(k) for k in mesh.parts)

@@ -226,7 +226,8 @@ SCHEMA: dict[str, F] = {
             "within": F(
                 "box",
                 "traction, pressure: only the part's edges with both ends in [x0, x1, y0, y1] "
-                "(length): a loading strip or platen",
+                "(length): a loading strip or platen (its width is that of the edges taken, "
+                "so it moves with h; the reported loads are the actual forces)",
             ),
             "at": F(
                 "point",
@@ -342,8 +343,9 @@ SCHEMA: dict[str, F] = {
             "view": F(
                 "box",
                 "region of the picture [x0, x1, y0, y1] (length; its colour range is taken "
-                "there); default: the whole body, or the holes and loaded parts framed when "
-                "they are a small part of it",
+                "there); default: the whole body, or a hole (else a loaded part) framed when "
+                "it is a small part of the body and the peaks of `field` and of the von Mises "
+                "stress lie in the frame",
             ),
             "name": F("string", "file name stem (default: the scene file's stem)"),
             "fe_compare": F(

@@ -233,8 +233,9 @@ class Boundary:
             near = _arc_windows(s, CURVATURE_SPACINGS * hh, total)
             idx, valid = near
             # circle x^2 + y^2 = 2 a x + 2 b y + c fitted in coordinates centred on the
-            # slot and scaled by its spacing (well conditioned at any position); a
-            # straight window (singular) gets a far centre from the ridge term
+            # slot and scaled by its spacing (well conditioned at any position); on a
+            # straight window (singular without it) the ridge term keeps the solve
+            # regular, and its centre lies on the line, which the `toward` test rejects
             q = np.where(valid[..., None], (p[idx] - p[:, None, :]) / hh[:, None, None], 0.0)
             w = valid.astype(float)
             A = np.concatenate([2 * q, np.ones(q.shape[:-1] + (1,))], axis=-1) * w[..., None]
