@@ -489,7 +489,9 @@ def write_fracture_series(folder: str | Path, result, name: str = "fracture") ->
     with their event numbers as times in ``<name>.pvd`` (open that one). Each holds the
     bonds as line cells with ``stiffness`` (1 intact, 0 broken), ``broken`` (0/1) and
     ``strength`` (force), and the nodes with ``displacement`` (at the event's critical
-    load) and ``damage`` (mean stiffness loss of the node's bonds).
+    load), ``damage`` (mean stiffness loss of the node's bonds) and ``stress_virial``
+    (N, 9: the damaged lattice's bond forces over each Voronoi cell; the recovered
+    stress of a state is ``result.solution(k).stress()``).
 
     Returns
     -------
@@ -503,17 +505,22 @@ def write_fracture_series(folder: str | Path, result, name: str = "fracture") ->
     mesh = result.model.mesh
     bonds = mesh.topology.bonds
     pts = np.c_[mesh.points, np.zeros(mesh.n_points)]
+    from .stress.virial import node_stress
+
     states = [(s.event, s.u, s.stiffness) for s in result.snapshots]
     last = len(result.events)
     states.append((last, result.u, result.stiffness))
     entries = []
     for k, (event, u, d) in enumerate(states):
+        virial = np.zeros((mesh.n_points, 9))
+        virial[:, [0, 1, 3, 4]] = node_stress(result.model.damaged(d), u).reshape(-1, 4)
         out = meshio.Mesh(
             pts,
             [("line", bonds)],
             point_data={
                 "displacement": np.c_[u, np.zeros(mesh.n_points)],
                 "damage": result.node_damage(d),
+                "stress_virial": virial,
             },
             cell_data={
                 "stiffness": [d],

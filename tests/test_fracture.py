@@ -611,3 +611,49 @@ def test_control_displacement_is_the_spread_and_a_translation_is_refused():
     mesh = dv.mesh.disc(1.0, 0.1)
     pair = [dv.PointLoad(at=(0, 1), value=(0, -1.0)), dv.PointLoad(at=(0, -1), value=(0, 1.001))]
     assert _load_measure(mesh, pair, 1.0) == pytest.approx(1.0005)  # one side, not 2P
+
+
+def test_the_damaged_lattice_is_a_model():
+    """model.damaged(d) assembles the stiffness the event loop solves (one assembly);
+    FractureResult.solution(k) is dv.solve on that model under the event's loads: the
+    state the loop recorded, with stresses like any solution; bad factors are refused."""
+    from dvstatic.problem import scaled
+
+    mesh = dv.mesh.rectangle(2.0, 1.0, 0.1, kind="cvt", seed=3)
+    sup, loads = pulled()
+    model = dv.DV(mesh, E=E, nu=NU)
+    res = dv.fracture(model, sup, loads, ft=FT, gf=2e-3, teeth=5, max_events=120)
+    snap = res.snapshots[-2]
+    d = res.stiffness_at(snap.event)
+    assert np.abs(d - snap.stiffness).max() <= 1e-15 and (d < 1).sum() > 3
+    s = split(model)
+    w, g = s.factors(d)
+    K = s.stiffness(mesh, w, g).toarray()
+    assert np.abs(model.damaged(d).stiffness().toarray() - K).max() <= 1e-12 * np.abs(K).max()
+    sol = res.solution(snap.event)
+    assert np.abs(sol.u - snap.u).max() <= 1e-9 * np.abs(snap.u).max()
+    lam = res.events[snap.event].load_factor
+    again = dv.solve(model.damaged(d), scaled(sup, lam), scaled(loads, lam))
+    np.testing.assert_allclose(sol.stress(), again.stress(), rtol=0, atol=1e-12 * FT)
+    assert "bonds cracked" in repr(sol.model)
+    with pytest.raises(IndexError):
+        res.solution(len(res.events))
+    with pytest.raises(dv.InputError, match="one factor per bond"):
+        model.damaged(np.ones(3))
+    with pytest.raises(dv.InputError, match=r"\[0, 1\]"):
+        model.damaged(np.full(mesh.n_bonds, 1.5))
+
+
+def test_the_vtu_series_carries_the_virial_stress(tmp_path):
+    import meshio
+
+    sup, loads = pulled()
+    res = dv.fracture(dv.DV(plate(0.1), E=E, nu=NU), sup, loads, ft=FT, max_events=5)
+    pvd = dv.io.write_fracture_series(tmp_path, res)
+    first = meshio.read(sorted(pvd.parent.glob("*.vtu"))[0]).point_data["stress_virial"]
+    lam = res.events[0].load_factor
+    assert first.shape == (res.model.mesh.n_points, 9)
+    # the first state is uniform tension lam x 1: the cell-area mean of the virial sxx
+    g = res.model.geometry
+    area = np.where(g.cell_area > 0.25 * g.dual_area, g.cell_area, g.dual_area)
+    assert np.sum(first[:, 0] * area) / area.sum() == pytest.approx(lam, rel=0.02)

@@ -93,6 +93,12 @@ class FractureResult:
         Wall time per stage.
     stats : dict
         Factorisations, largest update rank, events per second.
+    supports, loads : tuple
+        The problem's supports and reference loads (scaled by each event's load factor).
+
+    Every state is a model: :meth:`stiffness_at` gives the bond factors at an event,
+    :meth:`solution` the :class:`~dvstatic.Solution` of the damaged lattice there (its
+    ``stress()``, the writers and the checks as for any solve).
     """
 
     model: object
@@ -107,6 +113,37 @@ class FractureResult:
     strength: np.ndarray
     seconds: dict = field(default_factory=dict)
     stats: dict = field(default_factory=dict)
+    supports: tuple = ()
+    loads: tuple = ()
+
+    def _event(self, k: int) -> int:
+        n = len(self.events)
+        if not isinstance(k, (int, np.integer)) or isinstance(k, bool) or not -n <= k < n:
+            raise IndexError(f"event {k!r} out of range: the run has {n} events")
+        return int(k) % n
+
+    def stiffness_at(self, k: int) -> np.ndarray:
+        """Bond stiffness factors (n_bonds,; 1 intact, 0 broken) at event ``k``, before
+        its bond changes (the state whose critical load the event records)."""
+        k = self._event(k)
+        d = np.ones(self.model.mesh.n_bonds)
+        bonds = np.array([e.bond for e in self.events[:k]], dtype=np.int64)
+        lost = np.array([e.spring_lost for e in self.events[:k]], dtype=float)
+        np.subtract.at(d, bonds, lost)
+        return np.clip(d, 0.0, 1.0)
+
+    def solution(self, k: int = -1):
+        """The state at event ``k`` (default the last) as a solve: the damaged lattice
+        (``model.damaged(stiffness_at(k))``) in equilibrium under the supports and
+        loads times the event's load factor (``dv.solve``; ``u`` is the state the event
+        loop recorded, to the solver's tolerance)."""
+        from ..problem import scaled
+        from ..solvers import solve
+
+        k = self._event(k)
+        lam = self.events[k].load_factor
+        model = self.model.damaged(self.stiffness_at(k))
+        return solve(model, scaled(list(self.supports), lam), scaled(list(self.loads), lam))
 
     def curve(self) -> tuple[np.ndarray, np.ndarray]:
         """The load-displacement curve: ``(control_displacement, load)`` of every event."""

@@ -10,6 +10,7 @@ load-displacement curve as they come (the load factor of the next event may be l
 
 from __future__ import annotations
 
+import dataclasses
 import inspect
 import logging
 import math
@@ -163,9 +164,12 @@ def fracture(
     s0, s_tension = criterion.prepare(model, ft, weibull, timings, dofs)
     energy = None if gf is None else _energies(model, gf, s_tension)
     _warn_rows(model.mesh)
-    return _run(
+    res = _run(
         model, sp_, criterion, s0, energy, (dofs, values, f, control, ref), timings, t_start, opts
     )
+    problem = {"supports": tuple(as_list(supports, "Fix"))}
+    problem["loads"] = tuple(as_list(loads, "Traction, Pressure, BodyForce or PointLoad") or ())
+    return dataclasses.replace(res, **problem)
 
 
 def _signature() -> inspect.Signature:

@@ -33,6 +33,7 @@ import numpy as np
 from . import assembly
 from . import geometry as _geometry
 from .kinematics import edge_frames, elongation_gradients
+from .operator import RESIDUAL
 from .stabilise import coupling_matrices
 
 if TYPE_CHECKING:
@@ -41,9 +42,6 @@ if TYPE_CHECKING:
     from .models import VoronoiModel
 
 __all__ = ["RESIDUAL", "TriangleSplit", "split"]
-
-#: stiffness fraction a broken bond keeps (numerical only: no tension is ever read from it)
-RESIDUAL = 1e-9
 
 
 @dataclass(eq=False)

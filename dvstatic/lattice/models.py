@@ -17,6 +17,7 @@ A model is its calibration (:attr:`VoronoiModel.micro`) plus the
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -32,7 +33,7 @@ from ..material import Elastic
 from ..mesh import Mesh
 from . import calibration
 from . import geometry as _geometry
-from .operator import LatticeOperator
+from .operator import RESIDUAL, LatticeOperator
 from .stabilise import clip_coupling, triangle_modes, triangle_tensors
 from .weights import BONDS, bond_weights, voronoi_weights
 
@@ -91,6 +92,10 @@ class VoronoiModel:
         own; a bond between two triangles of different materials gets the springs of
         both, each in proportion to its triangle's share of the bond's Voronoi side,
         and every triangle its own coupling, so that the stiffness stays symmetric.
+    damage : ndarray, shape (n_bonds,), optional
+        Bond stiffness factors in [0, 1] (1 intact, 0 broken) of a cracked lattice, as
+        :func:`dvstatic.fracture` leaves it (use :meth:`damaged`): each spring times its
+        factor, each triangle's coupling times the smallest factor of its bonds.
 
     Raises
     ------
@@ -109,6 +114,7 @@ class VoronoiModel:
     plane: str = "stress"
     thickness: float | None = None
     materials: object = None
+    damage: np.ndarray | None = None
     kind: ClassVar[str] = ""
     barycentric_images: ClassVar[bool] = True
 
@@ -124,6 +130,7 @@ class VoronoiModel:
         if self.thickness is not None:
             object.__setattr__(self, "thickness", check_positive("thickness", self.thickness))
         object.__setattr__(self, "materials", self._checked_materials())
+        self._check_damage()
         self._check_calibration()
         if not launched_under_mpi():
             _ = self.micro  # calibrate now: an impossible nu fails at construction
@@ -151,6 +158,33 @@ class VoronoiModel:
                 raise TypeError(f"materials[{name!r}] must be (E, nu), got {value!r}") from None
             out[str(name)] = Elastic(E, nu, self.plane)
         return out
+
+    def _check_damage(self) -> None:
+        if self.damage is None:
+            return
+        d = np.array(self.damage, dtype=float)  # a copy: the model owns it
+        if d.shape != (self.mesh.n_bonds,):
+            raise InputError(
+                f"damage must have one factor per bond, shape ({self.mesh.n_bonds},), got "
+                f"{d.shape}",
+                "damage",
+            )
+        if not np.all((d >= 0) & (d <= 1)):
+            raise InputError("damage factors must lie in [0, 1] (1 intact, 0 broken)", "damage")
+        d.setflags(write=False)
+        object.__setattr__(self, "damage", d)
+
+    def damaged(self, stiffness: np.ndarray) -> VoronoiModel:
+        """This lattice with bond stiffness factors ``stiffness`` (n_bonds,; 1 intact, 0
+        broken), as :func:`dvstatic.fracture` leaves it: the same calibration, each
+        bond's spring times its factor (a broken bond keeps
+        :data:`~dvstatic.lattice.damage.RESIDUAL` of it), and a triangle's coupling
+        times the smallest factor of its bonds (:mod:`dvstatic.lattice.damage`). A model
+        like any other: ``dv.solve``, ``Solution.stress()`` and the writers take it."""
+        micros = self.micros
+        return dataclasses.replace(
+            self, calibration=micros if len(micros) > 1 else micros[0], damage=stiffness
+        )
 
     def _check_calibration(self) -> None:
         cal = self.calibration
@@ -274,6 +308,10 @@ class VoronoiModel:
         if stab.any():
             modes = triangle_modes(self.mesh, spring, self.barycentric_images)
             coupling = np.where(stab, clip_coupling(modes, coupling), coupling)
+        if self.damage is not None:  # as lattice.damage.TriangleSplit.factors does
+            d = self.damage
+            spring = spring * np.maximum(d, RESIDUAL)
+            coupling = coupling * np.min(d[self.mesh.topology.tri_bonds], axis=1)
         return LatticeOperator(self.mesh, spring, coupling, barycentric=self.barycentric_images)
 
     @cached_property
@@ -375,6 +413,8 @@ class VoronoiModel:
 
     def __repr__(self) -> str:
         extra = "" if self.plane == "stress" else ", plane='strain'"
+        if self.damage is not None:
+            extra += f", damage: {int(np.sum(self.damage < 1))} bonds cracked"
         extra += "" if self.thickness is None else f", thickness={self.thickness:g}"
         extra += f", materials={list(self.materials)}" if self.materials else ""
         return (

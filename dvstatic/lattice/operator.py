@@ -48,6 +48,11 @@ __all__ = ["LatticeOperator", "scatter_bond_forces", "virial_sum", "CHUNK"]
 CHUNK = 1 << 18  # triangles per assembly chunk (bounds temporary memory)
 
 
+#: stiffness fraction a broken bond keeps (numerical only: no tension is ever read from
+#: it; :mod:`dvstatic.lattice.damage`)
+RESIDUAL = 1e-9
+
+
 def scatter_bond_forces(bonds: np.ndarray, fb: np.ndarray, n: int) -> np.ndarray:
     """Nodal forces of bond forces: ``+fb`` on end A, ``-fb`` on end O, interleaved (2n,).
 

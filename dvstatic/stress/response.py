@@ -11,7 +11,8 @@ reports there; its inverse is the correction (the localisation tensor of
 homogenisation theory, measured on the very mesh and supports). With several
 materials, uniform stress is no continuum state (the strains do not fit at the
 interfaces), so each material's nodes are corrected with the responses of a
-single-material companion of the model (the same mesh, calibration and bonds).
+single-material companion of the model (the same mesh, calibration and bonds); a
+damaged lattice (fracture) is corrected with the responses of its intact companion.
 """
 
 from __future__ import annotations
@@ -35,10 +36,12 @@ _COMPANIONS = PerObject("single-material companions", lambda model: {})
 
 
 def companion(model: VoronoiModel, material: int) -> VoronoiModel:
-    """``model`` itself with one material; otherwise a model of the same kind on the
-    same mesh made of material ``material`` alone, with that material's calibrated
-    micro-parameters (cached)."""
-    if not model.materials:
+    """``model`` itself with one material and no damage; otherwise a model of the same
+    kind on the same mesh made of material ``material`` alone, intact, with that
+    material's calibrated micro-parameters (cached). (A cracked lattice under uniform
+    traction is not in uniform stress: its cracks concentrate it, which the correction
+    must not undo.)"""
+    if not model.materials and model.damage is None:
         return model
     cache = _COMPANIONS(model)
     if material not in cache:
