@@ -91,13 +91,6 @@ class Elastic:
         E2, nu2 = self.in_plane
         return plane_stress_from_strain(eps, E2, nu2)
 
-    def out_of_plane(self, sigma: np.ndarray) -> np.ndarray:
-        """``szz`` of in-plane stresses (..., 2, 2): ``nu (sxx + syy)`` in plane strain,
-        zero in plane stress."""
-        if self.plane == "stress":
-            return np.zeros(np.shape(sigma)[:-2])
-        return self.nu * (sigma[..., 0, 0] + sigma[..., 1, 1])
-
 
 def check_poisson(nu, name: str = "nu") -> float:
     """A Poisson's ratio in the plane-stress range ``-1 < nu < 1``."""

@@ -192,3 +192,27 @@ def test_elastica_lattice_16_rows(tmp_path):
     for r in rows:
         assert abs(r["a_error"]) <= 0.02, r
         assert abs(r["h_over_v_error"]) <= 0.05, r
+
+
+def test_the_amg_tangent_honours_rtol_and_maxiter(monkeypatch):
+    """solver="amg" with nonlinear=True: GMRES+AMG gets the options' rtol and iteration
+    limit (as the PETSc engine's Newton does), not constants of its own."""
+    from dvstatic.solvers import tangent
+
+    seen = []
+    real = tangent.AMGTangent.__init__
+
+    def record(self, mesh, linear_rtol=1e-10, maxiter=300):
+        seen.append((linear_rtol, maxiter))
+        real(self, mesh, linear_rtol, maxiter)
+
+    monkeypatch.setattr(tangent.AMGTangent, "__init__", record)
+    mesh = dv.mesh.rectangle(4.0, 1.0, 0.25, kind="lattice")
+    sup, load = dv.Fix("left"), dv.Traction("right", (0.0, -1.0))
+    dv.solve(dv.DV(mesh, 1e4, 0.3), sup, load, nonlinear=True, solver="amg", rtol=1e-9, maxiter=90)
+    assert seen == [(1e-9, 90)]
+    t = tangent.AMGTangent(mesh, 1e-9, 90)
+    assert (t.restart, t.cycles) == (60, 2)
+    from dvstatic.solvers.newton import absolute_floor
+
+    assert absolute_floor(2.0, 0.5, 100) == pytest.approx(1e-10 * 2.0 * 0.5 * 10.0)

@@ -58,6 +58,10 @@ log = logging.getLogger(__name__)
 __all__ = ["lame_plane_stress", "FESolution", "solve", "Comparison", "compare"]
 
 
+#: most uniform refinements of the FE reference (the library's and the scene's limit)
+MAX_REFINE = 8
+
+
 @dataclass(frozen=True, eq=False)
 class FESolution:
     """Finite-element solution.
@@ -294,7 +298,7 @@ def solve(
     table = _materials(mesh, Elastic(E, nu, plane), materials)
     t = 1.0 if thickness is None else check_positive("thickness", thickness)
     order = check_int("order", order, minimum=1, maximum=2)
-    refine = check_int("refine", refine, minimum=0, maximum=8)
+    refine = check_int("refine", refine, minimum=0, maximum=MAX_REFINE)
     t0 = time.perf_counter()
     fe = build(mesh, refine, order)
     elem = skfem.ElementVector(skfem.ElementTriP1() if order == 1 else skfem.ElementTriP2())

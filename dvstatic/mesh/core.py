@@ -310,13 +310,6 @@ class Mesh:
             out[str(name)] = t
         return out
 
-    def region_of_triangles(self) -> np.ndarray:
-        """Index of every triangle's region in ``list(mesh.regions)``, -1 for none, (M,)."""
-        out = np.full(self.n_triangles, -1, dtype=np.int64)
-        for k, tris in enumerate(self.regions.values()):
-            out[tris] = k
-        return out
-
     # ------------------------------------------------------------------ transforms
     def perturbed(self, amplitude: float, seed: int | None = 0) -> Mesh:
         """Randomly moved copy of the mesh (the paper's way to raise sigma_L).

@@ -63,10 +63,6 @@ class _LoopBase(ABC):
     def area(self) -> float:
         return abs(signed_area(self.samples()))
 
-    @property
-    def perimeter(self) -> float:
-        return float(sum(c.length for c in self.pieces()))
-
     def contains(self, p: np.ndarray) -> np.ndarray:
         """Even-odd point-in-polygon test on the polyline, (n,) bool."""
         return in_polygon(self.samples(), p)

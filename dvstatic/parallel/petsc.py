@@ -22,7 +22,7 @@ from ..errors import ConvergenceError, InputError, MissingDependencyError, Solve
 from ..lattice.operator import scatter_bond_forces
 from ..problem import FollowerPressures, check_restrained, constraints
 from ..problem.follower import split_followers
-from ..solvers.newton import State, solve_nonlinear
+from ..solvers.newton import State, absolute_floor, solve_nonlinear
 from ..solvers.result import LinearSolve, ParallelInfo, Solution, SolveInfo, StabilityCheck, Timings
 from .partition import Layout, layout, micro_parameters, owned_bonds, owned_loads, patch_memory
 
@@ -412,8 +412,7 @@ class PatchProblem:
         cnt, tot = s.mpi.allreduce(
             np.array([own_b.sum(), s.pm.geometry.length[own_b].sum()], float)
         )
-        # absolute floor as in the serial problem: 1e-10 k_n l_mean sqrt(n_dof)
-        self.atol = 1e-10 * s.pm.k_n * (tot / cnt) * np.sqrt(float(s.n_dof))
+        self.atol = absolute_floor(s.pm.k_n * s.pm.t, tot / cnt, s.n_dof)  # as serially
         self.log: list[LinearSolve] = []
         self.assembly_seconds = 0.0
         self._builds = 0

@@ -12,6 +12,7 @@ import tomllib
 
 import numpy as np
 
+from ..fem import MAX_REFINE
 from ..solvers.options import ALIASES
 from .schema import SCHEMA, F, SceneError
 
@@ -250,8 +251,10 @@ def _check_rules(path, d: dict) -> None:
     o = d["output"]
     if o["fe_order"] not in (1, 2):
         raise SceneError(path, "output.fe_order", f"must be 1 or 2, got {o['fe_order']}")
-    if not 0 <= o["fe_refine"] <= 6:
-        raise SceneError(path, "output.fe_refine", f"must be in [0, 6], got {o['fe_refine']}")
+    if not 0 <= o["fe_refine"] <= MAX_REFINE:
+        raise SceneError(
+            path, "output.fe_refine", f"must be in [0, {MAX_REFINE}], got {o['fe_refine']}"
+        )
     if o["scale"] is not None and o["scale"] <= 0:
         raise SceneError(path, "output.scale", f"must be > 0, got {o['scale']}")
     if d["fracture"] is not None:

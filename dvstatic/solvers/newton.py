@@ -35,7 +35,26 @@ from .tangent import TangentSolver
 
 log = logging.getLogger(__name__)
 
-__all__ = ["State", "NewtonProblem", "SerialProblem", "NewtonReport", "solve_nonlinear"]
+__all__ = [
+    "State",
+    "NewtonProblem",
+    "SerialProblem",
+    "NewtonReport",
+    "solve_nonlinear",
+    "absolute_floor",
+    "ATOL_FLOOR",
+]
+
+
+#: Newton's absolute residual floor in units of k_n t l_mean sqrt(n_dof) (force)
+ATOL_FLOOR = 1e-10
+
+
+def absolute_floor(stiffness: float, mean_length: float, n_dof: int) -> float:
+    """The absolute floor of Newton's residual tolerance (force): :data:`ATOL_FLOOR`
+    ``stiffness * mean_length * sqrt(n_dof)``, ``stiffness`` = ``k_n`` times the
+    thickness; the same for the serial and the distributed engines."""
+    return ATOL_FLOOR * stiffness * mean_length * float(np.sqrt(n_dof))
 
 
 @dataclass(frozen=True, eq=False)
@@ -118,8 +137,7 @@ class SerialProblem:
         self.targets[self.dofs] = values
         self.f_ext = np.asarray(f_ext, dtype=float)
         self.follower = follower if follower else None
-        force_unit = model.k_n * model.t * float(np.mean(model.geometry.length))
-        self.atol = 1e-10 * force_unit * np.sqrt(n)
+        self.atol = absolute_floor(model.k_n * model.t, float(np.mean(model.geometry.length)), n)
         self.tangent = tangent
         self.system: ConstrainedSystem | None = None
 

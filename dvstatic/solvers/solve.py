@@ -166,7 +166,9 @@ def _newton(model: VoronoiModel, p: _Problem, opts, kind: str, common: dict, loa
     dead, follow = split_followers(loads)
     f_dead = load_vector(model.mesh, dead, thickness=model.t) if follow else p.f
     follower = FollowerPressures.from_loads(model.mesh, follow, model.t)
-    tangent = tangent_solver(kind, model.mesh)
+    # GMRES+AMG: the options' rtol, and its iteration limit (default 300: 5 restarts of 60)
+    maxiter = opts.maxiter if opts.maxiter is not None else 300
+    tangent = tangent_solver(kind, model.mesh, opts.rtol, maxiter)
     problem = SerialProblem(model, p.dofs, p.values, f_dead, tangent, follower)
     x, rep = solve_nonlinear(problem, opts, kind)
     r_full = _internal(model, x, p.K, True) - f_dead

@@ -55,9 +55,11 @@ class DirectTangent:
 class AMGTangent:
     """GMRES + AMG on the symmetric part, rebuilt when it stops working."""
 
-    def __init__(self, mesh: Mesh, linear_rtol: float = 1e-10):
+    def __init__(self, mesh: Mesh, linear_rtol: float = 1e-10, maxiter: int = 300):
         self.mesh = mesh
         self.linear_rtol = linear_rtol
+        self.restart = min(60, maxiter)
+        self.cycles = max(1, -(-maxiter // self.restart))  # restart cycles: >= maxiter its
         self.builds = 0
         self.negative_pivots: int | None = None
         self.amg: AMGSolver | None = None
@@ -116,8 +118,8 @@ class AMGTangent:
             rtol=self.linear_rtol,
             atol=0.0,
             M=self.amg.ml.aspreconditioner(),
-            restart=60,
-            maxiter=5,
+            restart=self.restart,
+            maxiter=self.cycles,
             callback=cb,
             callback_type="pr_norm",
         )
@@ -128,6 +130,7 @@ class AMGTangent:
         return x, count[0], ok
 
 
-def tangent_solver(kind: str, mesh: Mesh) -> TangentSolver:
-    """The tangent solver of a linear solver name (``direct`` or ``amg``)."""
-    return DirectTangent(mesh) if kind == "direct" else AMGTangent(mesh)
+def tangent_solver(kind: str, mesh: Mesh, rtol: float = 1e-10, maxiter: int = 300) -> TangentSolver:
+    """The tangent solver of a linear solver name (``direct`` or ``amg``; the options
+    ``rtol`` and ``maxiter`` of GMRES+AMG, as the PETSc engine's Newton honours them)."""
+    return DirectTangent(mesh) if kind == "direct" else AMGTangent(mesh, rtol, maxiter)
