@@ -148,3 +148,26 @@ def test_options_are_listed_once_and_old_names_warn():
     assert sol.info.converged
     with pytest.raises(TypeError, match="unknown solve option.*'tolerance'"):
         dv.solve(dv.DV(m, E_BEAM, NU), sup, ld, tolerance=1e-3)
+
+
+def test_the_problem_is_resolved_once_and_carried_on_the_solution(monkeypatch):
+    """dv.solve resolves the supports and loads once (dv.problem.Problem on
+    Solution.problem); the stress recovery reads the constrained dofs from it instead of
+    working them out again."""
+    from dvstatic.solvers import responses
+
+    mesh = dv.mesh.rectangle(2.0, 1.0, 0.1)
+    sup, load = dv.Fix("left"), dv.Traction("right", (1.0, 0.0))
+    sol = dv.solve(dv.DV(mesh, 1e4, 0.3), sup, load)
+    p = sol.problem
+    assert isinstance(p, dv.problem.Problem) and p.supports == (sup,) and p.loads == (load,)
+    np.testing.assert_array_equal(p.dofs, dv.problem.constraints(mesh, [sup])[0])
+    assert p.fixed.sum() == len(p.dofs)
+    twice = p.scaled(2.0)
+    np.testing.assert_allclose(twice.f, 2.0 * p.f)
+
+    def again(*a, **k):
+        raise AssertionError("constraints worked out again")
+
+    monkeypatch.setattr(responses, "constraints", again)
+    assert np.all(np.isfinite(sol.stress()))

@@ -21,11 +21,9 @@ import numpy as np
 from ..errors import InputError
 from ..lattice import VoronoiModel
 from ..lattice.damage import split as _split
-from ..linalg import check_restrained
 from ..mesh import Mesh
-from ..problem import constraints, load_vector
+from ..problem import Problem
 from ..problem.loads import nodal_forces
-from ..problem.select import as_list
 from ..solvers.options import options_docstring
 from .criteria import criterion_for, per_bond
 from .options import FractureOptions
@@ -51,13 +49,11 @@ BALANCED = 1e-2
 MECHANISM = 1e-6
 
 
-def _reference(model, supports, loads):
+def _reference(model, problem: Problem):
     """Constrained dofs, prescribed values, forces and the control of the problem."""
     mesh = model.mesh
-    dofs, values = constraints(mesh, supports)
-    check_restrained(mesh.points, dofs)
-    loads = as_list(loads, "Traction, Pressure, BodyForce or PointLoad") if loads else []
-    f = load_vector(mesh, loads, thickness=model.t) if loads else np.zeros(2 * mesh.n_points)
+    dofs, values, f = problem.dofs, problem.values, problem.f
+    loads = list(problem.loads)
     if np.any(values):
         return dofs, values, f, "displacement", _displacement_measure(dofs, values)
     if not np.any(f):
@@ -158,7 +154,8 @@ def fracture(
     _check_options(model, weibull)
     timings: dict[str, float] = {}
     t_start = time.perf_counter()
-    dofs, values, f, control, ref = _reference(model, supports, loads)
+    problem = Problem.build(model, supports, loads)
+    dofs, values, f, control, ref = _reference(model, problem)
     sp_ = _split(model)
     criterion = criterion_for(opts.criterion, model, sp_)
     s0, s_tension = criterion.prepare(model, ft, weibull, timings, dofs)
@@ -167,9 +164,7 @@ def fracture(
     res = _run(
         model, sp_, criterion, s0, energy, (dofs, values, f, control, ref), timings, t_start, opts
     )
-    problem = {"supports": tuple(as_list(supports, "Fix"))}
-    problem["loads"] = tuple(as_list(loads, "Traction, Pressure, BodyForce or PointLoad") or ())
-    return dataclasses.replace(res, **problem)
+    return dataclasses.replace(res, supports=problem.supports, loads=problem.loads)
 
 
 def _signature() -> inspect.Signature:

@@ -20,11 +20,13 @@ from .loads import (
     load_vector,
     nodal_forces,
 )
+from .problem import Problem
 from .scale import scaled
 from .select import At, as_list, nearest_node, select_edges, select_nodes
 from .supports import Fix, SupportComponent, constraints, support_components
 
 __all__ = [
+    "Problem",
     "scaled",
     "Fix",
     "Traction",

@@ -26,13 +26,14 @@ RESPONSE_RTOL = 1e-10
 
 
 def recovered_stress(
-    model: VoronoiModel, u: np.ndarray, supports, loads, solver: str
+    model: VoronoiModel, u: np.ndarray, supports, loads, solver: str, problem=None
 ) -> np.ndarray:
     """The default stress (N, 2, 2) of a linear solution ``u`` (N, 2) of ``model``
     under ``supports`` and ``loads``, solved with ``solver`` (its engine is reused for
-    the responses)."""
+    the responses); ``problem``: the solve's resolved :class:`~dvstatic.problem.Problem`
+    (its constrained dofs, not worked out again)."""
     mesh = model.mesh
-    dofs, _ = constraints(mesh, supports)
+    dofs = problem.dofs if problem is not None else constraints(mesh, supports)[0]
     fixed = np.zeros(2 * mesh.n_points, dtype=bool)
     fixed[dofs] = True
     rec = recovery_of(model, fixed)

@@ -10,6 +10,7 @@ import numpy as np
 from ..errors import InputError
 from ..lattice import VoronoiModel
 from ..mesh.locate import interpolate, snap_point
+from ..problem import Problem
 from ..stress import node_stress, out_of_plane_stress, strain_stress, triangle_stress
 from .info import LinearSolve, NewtonStep, ParallelInfo, SolveInfo, StabilityCheck, Timings
 from .responses import recovered_stress
@@ -54,6 +55,8 @@ class Solution:
     info: SolveInfo
     supports: list = field(default_factory=list)
     loads: list = field(default_factory=list)
+    #: the supports and loads resolved (dofs, values, load vector) by the solve
+    problem: Problem | None = field(default=None, repr=False)
     #: stresses computed so far, one per method
     _stresses: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
@@ -108,7 +111,9 @@ class Solution:
                     "method='virial' for a nonlinear solution",
                     "method",
                 )
-            return recovered_stress(self.model, self.u, self.supports, self.loads, self.info.solver)
+            return recovered_stress(
+                self.model, self.u, self.supports, self.loads, self.info.solver, self.problem
+            )
         if method == "virial":
             return node_stress(self.model, self.u, linear=not self.info.nonlinear)
         if method == "strain":

@@ -12,7 +12,7 @@ import numpy as np
 from ..errors import ConvergenceError, InputError
 from ..lattice import VoronoiModel, check_model
 from ..lattice import geometry as _geometry
-from ..problem import FollowerPressures, as_list, check_restrained, constraints, load_vector
+from ..problem import FollowerPressures, Problem, as_list, load_vector
 from ..problem.follower import split_followers
 from . import backends
 from .linear import solve_linear
@@ -39,25 +39,25 @@ def solve(model: VoronoiModel, supports=None, loads=None, *, options=None, **kwa
     if opts.solver == "petsc":
         return backends.engine("petsc").solve(model, supports_l, loads_l, opts)
     t0 = time.perf_counter()
+    problem = Problem.build(model, supports_l, loads_l)  # resolved once, carried on
     try:
-        return _solve_serial(model, supports_l, loads_l, opts)
+        return _solve_serial(model, problem, opts)
     except ConvergenceError as exc:
         if not opts.best_effort or exc.state is None:
             raise
-        return _unconverged(model, supports_l, loads_l, exc, opts, t0)
+        return _unconverged(model, problem, exc, opts, t0)
 
 
 class _Problem:
     """Supports and loads turned into dofs, values and forces, with stage timings."""
 
-    def __init__(self, model: VoronoiModel, supports: list, loads: list):
+    def __init__(self, model: VoronoiModel, problem: Problem):
         self.t_start = time.perf_counter()
         mesh = model.mesh
         # the model calibrated itself at construction: its cost is reported, not re-run
         self.t_calibration = sum(float((m.details or {}).get("seconds", 0.0)) for m in model.micros)
-        self.dofs, self.values = constraints(mesh, supports)
-        check_restrained(mesh.points, self.dofs)
-        self.f = load_vector(mesh, loads, thickness=model.t)
+        self.problem = problem
+        self.dofs, self.values, self.f = problem.dofs, problem.values, problem.f
         self.reused: list[str] = []
         t0 = time.perf_counter()
         if _geometry.is_cached(mesh):
@@ -86,8 +86,9 @@ class _Problem:
         )
 
 
-def _solve_serial(model: VoronoiModel, supports: list, loads: list, opts) -> Solution:
-    p = _Problem(model, supports, loads)
+def _solve_serial(model: VoronoiModel, problem: Problem, opts) -> Solution:
+    supports, loads = list(problem.supports), list(problem.loads)
+    p = _Problem(model, problem)
     n = p.K.shape[0]
     kind = opts.resolved_solver(n)
     common = dict(
@@ -120,7 +121,9 @@ def _solve_serial(model: VoronoiModel, supports: list, loads: list, opts) -> Sol
     )
     if not opts.nonlinear:
         _warn_large(model.mesh, x.reshape(-1, 2))
-    return Solution(model, x.reshape(-1, 2), p.reactions(r_full), info, supports, loads)
+    return Solution(
+        model, x.reshape(-1, 2), p.reactions(r_full), info, supports, loads, problem=problem
+    )
 
 
 #: a linear solution whose largest displacement exceeds this fraction of the body's
@@ -212,13 +215,10 @@ def _internal(model: VoronoiModel, x: np.ndarray, K, nonlinear: bool) -> np.ndar
     return model.internal_force(x.reshape(-1, 2)) if nonlinear else K @ x
 
 
-def _unconverged(
-    model, supports: list, loads: list, exc: ConvergenceError, opts, t0: float
-) -> Solution:
+def _unconverged(model, problem: Problem, exc: ConvergenceError, opts, t0: float) -> Solution:
     """The last state of a failed iteration, marked unconverged (best effort)."""
-    mesh = model.mesh
-    dofs, _ = constraints(mesh, supports)
-    f_full = load_vector(mesh, loads, thickness=model.t)
+    dofs, f_full = problem.dofs, problem.f
+    supports, loads = list(problem.supports), list(problem.loads)
     x = np.asarray(exc.state, dtype=float).reshape(-1)
     r_full = _internal(model, x, model.stiffness("bsr"), opts.nonlinear) - exc.load_factor * f_full
     reactions = np.zeros_like(x)
@@ -258,7 +258,9 @@ def _unconverged(
         exc,
         extra={"best_effort": True},
     )
-    return Solution(model, x.reshape(-1, 2), reactions.reshape(-1, 2), info, supports, loads)
+    return Solution(
+        model, x.reshape(-1, 2), reactions.reshape(-1, 2), info, supports, loads, problem=problem
+    )
 
 
 def _signature() -> inspect.Signature:
