@@ -32,6 +32,7 @@ if TYPE_CHECKING:  # annotations only: scipy is imported where it is used
 log = logging.getLogger(__name__)
 
 __all__ = [
+    "SolveRecord",
     "rigid_modes",
     "check_restrained",
     "ConstrainedSystem",
@@ -42,6 +43,37 @@ __all__ = [
     "AMG_OPTIONS",
     "AUTO_DIRECT_MAX_DOF",
 ]
+
+
+@dataclass(frozen=True)
+class SolveRecord:
+    """What one linear solve of :class:`DirectSolver` or :class:`AMGSolver` reports.
+
+    Attributes
+    ----------
+    iterations : int
+        CG iterations, or the direct solver's refinement steps.
+    residuals : list of float
+        Relative residual history (the last one recomputed from ``A x - b``).
+    backward_error : float
+        Normwise backward error (direct solves; NaN otherwise).
+    indefinite : bool
+        CG met a direction of non-positive curvature (AMG solves).
+    """
+
+    iterations: int
+    residuals: list
+    backward_error: float = float("nan")
+    indefinite: bool = False
+
+    def __getitem__(self, key: str):  # the dict these records were
+        if key not in self.__dataclass_fields__:
+            raise KeyError(key)
+        return getattr(self, key)
+
+    def get(self, key: str, default=None):
+        return getattr(self, key) if key in self.__dataclass_fields__ else default
+
 
 #: pyamg smoothed-aggregation settings, each measured against pyamg's defaults on the DV
 #: stiffness at 1e6 nodes (2e6 dof), in units of one matrix-vector product with K
@@ -220,8 +252,8 @@ class DirectSolver:
         self.setup_seconds = time.perf_counter() - t0
 
     def solve(self, b: np.ndarray, x0: np.ndarray | None = None, rtol: float | None = None):
-        """Solve ``A x = b``; returns ``x`` and ``{"iterations", "residuals",
-        "backward_error"}``.
+        """Solve ``A x = b``; returns ``x`` and its :class:`SolveRecord` (iterations,
+        residuals, backward error).
 
         Up to three steps of iterative refinement (``x += LU^-1 (b - A x)``) are taken
         while the relative residual is above 1e-13 and keeps falling: they cost one
@@ -232,7 +264,7 @@ class DirectSolver:
         nb = float(np.linalg.norm(b)) or 1.0
         x = self._apply(b)
         if not np.all(np.isfinite(x)):
-            return x, {"iterations": 0, "residuals": [np.inf], "backward_error": np.inf}
+            return x, SolveRecord(0, [np.inf], np.inf)
         r = b - self.A @ x
         residuals = [float(np.linalg.norm(r)) / nb]
         steps = 0
@@ -250,7 +282,7 @@ class DirectSolver:
         # normwise backward error: x solves (A + dA) x = b with |dA| / |A| this small
         denom = self._norm_inf * float(np.max(np.abs(x))) + float(np.max(np.abs(b)))
         backward = float(np.max(np.abs(r))) / denom if denom > 0 else 0.0
-        return x, {"iterations": steps, "residuals": residuals, "backward_error": backward}
+        return x, SolveRecord(steps, residuals, backward)
 
     def apply(self, b: np.ndarray) -> np.ndarray:
         """``A^-1 b`` from the factors alone (no refinement); ``b`` (n,) or (n, k)."""
@@ -320,9 +352,9 @@ class AMGSolver:
     ):
         """CG preconditioned by one V-cycle; stops at ``|r| <= rtol |b|``.
 
-        Returns ``x`` and ``{"iterations", "residuals", "indefinite"}`` (relative
-        residual history; ``indefinite`` when CG met a direction of non-positive
-        curvature, i.e. the operator is not positive definite).
+        Returns ``x`` and its :class:`SolveRecord` (relative residual history;
+        ``indefinite`` when CG met a direction of non-positive curvature, i.e. the
+        operator is not positive definite).
         """
         M = self.ml.aspreconditioner(cycle="V")
         return preconditioned_cg(self.A, b, M, x0=x0, rtol=rtol, maxiter=maxiter)
@@ -377,7 +409,7 @@ def preconditioned_cg(A, b, M, x0=None, rtol: float = 1e-10, maxiter: int = 500)
             rz = rz_new
     true = float(np.linalg.norm(A @ x - b)) / nb if np.all(np.isfinite(x)) else np.inf
     hist[-1] = true
-    return x, {"iterations": it, "residuals": hist, "indefinite": indefinite}
+    return x, SolveRecord(it, hist, indefinite=bool(indefinite))
 
 
 def nested_dissection(points: np.ndarray, edges: np.ndarray, leaf: int = 128) -> np.ndarray:

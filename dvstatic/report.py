@@ -349,8 +349,8 @@ def _fe_summary(solution, fe) -> dict:
     return {
         "order": fe.order,
         "refine": fe.refine,
-        "n_dof": fe.info["n_dof"],
-        "seconds": fe.info["seconds"],
+        "n_dof": fe.info.n_dof,
+        "seconds": fe.info.seconds.as_dict(),
         "rel_l2_difference": c.l2,
         "rel_max_difference": c.max,
         # a body held at points floats on the lattice's fluctuations there: the rigid
@@ -405,7 +405,7 @@ def fracture_lines(result, checks: list[dict], title: str, written=()) -> list[s
             f"  peak      load {peak.load:.6g} at displacement {peak.control_displacement:.6g} "
             f"(load factor {peak.load_factor:.6g}, event {peak.index})",
             f"  energy    released {result.dissipated:.6g} (force x length)",
-            f"  residual  largest relative residual {result.stats['max_residual']:.1e}",
+            f"  residual  largest relative residual {result.stats.max_residual:.1e}",
         ]
     lines.append(f"  stopped   {result.message}")
     for c in checks:
@@ -422,9 +422,9 @@ def fracture_lines(result, checks: list[dict], title: str, written=()) -> list[s
     if checks:
         lines.append("  differences in %: (value - reference) / |reference|")
     lines.append(
-        f"  time      strengths {t.get('strength', 0):.2f} s, events {t.get('events', 0):.2f} s "
-        f"({result.stats['events_per_second']:.1f} events/s, "
-        f"{result.stats['factorisations']} factorisations)"
+        f"  time      strengths {t.strength:.2f} s, events {t.events:.2f} s "
+        f"({result.stats.events_per_second:.1f} events/s, "
+        f"{result.stats.factorisations} factorisations)"
     )
     lines += [f"  wrote     {w}" for w in written]
     return lines

@@ -106,7 +106,7 @@ def test_fe_on_a_mesh_beyond_46341_nodes():
         [dv.Fix("left", x=0.0), dv.Fix("bottom", y=0.0)],
         [dv.Traction("right", (-1.0, 0.0))],
     )
-    assert fe.info["load_resultant"][0] == pytest.approx(-1.0, rel=1e-12)
+    assert fe.info.load_resultant[0] == pytest.approx(-1.0, rel=1e-12)
     exact = np.c_[-mesh.points[:, 0] / E, nu * mesh.points[:, 1] / E]
     assert np.abs(fe.u - exact).max() < 1e-9 * np.abs(exact).max()
 

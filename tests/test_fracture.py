@@ -195,7 +195,7 @@ def test_updates_give_the_same_events_as_refactorising_every_event():
         [[a.load_factor, b.load_factor] for a, b in zip(fast.events, slow.events, strict=True)]
     )
     assert np.allclose(lf[:, 0], lf[:, 1], rtol=1e-8)
-    assert fast.stats["factorisations"] < slow.stats["factorisations"] / 10
+    assert fast.stats.factorisations < slow.stats.factorisations / 10
 
 
 def test_every_state_is_in_equilibrium():

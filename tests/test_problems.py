@@ -62,7 +62,7 @@ def test_pressure_on_a_curved_boundary_has_the_exact_resultant():
             mesh, E, NU, [dv.Fix("outer")], [dv.Pressure(upper, p)], order=order, refine=1
         )
         assert fe.u[:, 1].max() > 0  # pushed up, away from the bore's centre
-        np.testing.assert_allclose(fe.info["load_resultant"], [0.0, 2 * p * 0.4], atol=1e-12)
+        np.testing.assert_allclose(fe.info.load_resultant, [0.0, 2 * p * 0.4], atol=1e-12)
 
 
 def test_linear_traction_has_the_exact_resultant_and_moment():

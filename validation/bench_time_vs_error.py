@@ -177,7 +177,7 @@ def run_size(
                 "method": f"FE P{order}",
                 "seconds": dt,
                 "error": e,
-                "dof": fs.info["n_dof"],
+                "dof": fs.info.n_dof,
             }
         )
     return rows

@@ -120,7 +120,7 @@ def _fe(bm, mesh, sup, loads, order) -> dict:
     import dvstatic as dv
 
     fe = dv.fem.solve(mesh, bm.E, bm.nu, sup, loads, order=order, plane=bm.plane)
-    rec = {"u": fe.u, "solve_seconds": fe.info["seconds"]["total"]}
+    rec = {"u": fe.u, "solve_seconds": fe.info.seconds.total}
     if bm.stress_part is not None:
         nodes = mesh.part_nodes(bm.stress_part)
         full = np.zeros((mesh.n_points, 2, 2))

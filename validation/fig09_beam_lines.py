@@ -48,7 +48,7 @@ def main(argv: list[str] | None = None) -> int:
         "figure": "fig09",
         "h": h,
         "nodes": mesh.n_points,
-        "fe_dof": ref.info["n_dof"],
+        "fe_dof": ref.info.n_dof,
         "x": xs,
         "lines": {},
         "midspan": {},

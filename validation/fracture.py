@@ -77,7 +77,7 @@ def brazilian_table(h: float, seeds: int, gf) -> dict:
                 "broken": len(res.broken),
                 "splitting_over_ft": 2 * p / (np.pi * 2.0) / FT,
                 "near_diameter": float(np.mean(np.abs(mid[:, 0]) < 0.2)),
-                "max_residual": res.stats["max_residual"],
+                "max_residual": res.stats.max_residual,
                 "seconds": time.perf_counter() - t0,
             }
         )
@@ -130,7 +130,7 @@ def petersson(h: float, model=dv.DV, kind: str = "jittered") -> dict:
         "dissipated_Nmm": res.dissipated,
         "gf_ligament_Nmm": target,
         "stop": res.message,
-        "max_residual": res.stats["max_residual"],
+        "max_residual": res.stats.max_residual,
         "seconds": time.perf_counter() - t0,
         "curve": {"deflection": d.tolist(), "load": p.tolist()},
     }
@@ -153,9 +153,9 @@ def speed(h: float, events: int, ref_events: int) -> dict:
         out[name] = {
             "nodes": res.model.mesh.n_points,
             "events": len(res.events),
-            "events_per_second": res.stats["events_per_second"],
-            "factorisations": res.stats["factorisations"],
-            "factorisation_seconds": res.seconds["factorisation"],
+            "events_per_second": res.stats.events_per_second,
+            "factorisations": res.stats.factorisations,
+            "factorisation_seconds": res.seconds.factorisation,
             "bonds": [e.bond for e in res.events],
         }
         print(

@@ -9,7 +9,7 @@ breaking a bond does to the DV/RV force law is in :mod:`dvstatic.lattice.damage`
 """
 
 from .options import FractureOptions
-from .result import Event, FractureResult, Snapshot
+from .result import Event, FractureResult, FractureStats, FractureTimings, Snapshot
 from .sla import EQUILIBRIUM_TOL, fracture
 from .strength import Weibull
 
@@ -19,6 +19,8 @@ __all__ = [
     "Weibull",
     "Event",
     "FractureResult",
+    "FractureTimings",
+    "FractureStats",
     "Snapshot",
     "EQUILIBRIUM_TOL",
 ]

@@ -6,7 +6,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-__all__ = ["Event", "Snapshot", "FractureResult"]
+__all__ = ["Event", "Snapshot", "FractureResult", "FractureTimings", "FractureStats"]
 
 
 @dataclass(frozen=True)
@@ -67,6 +67,26 @@ class Snapshot:
 
 
 @dataclass(frozen=True)
+class FractureTimings:
+    """Wall time of the stages of a fracture analysis (s)."""
+
+    setup: float = 0.0  #: the problem, the split stiffness, the criterion
+    strength: float = 0.0  #: the bonds' responses to uniform stress and their strengths
+    events: float = 0.0  #: the event loop
+    factorisation: float = 0.0  #: of which factorising the stiffness
+
+
+@dataclass(frozen=True)
+class FractureStats:
+    """How the event loop went."""
+
+    factorisations: int = 0  #: stiffness factorisations (1 + refactorisations)
+    max_rank: int = 0  #: the largest low-rank update allowed (FractureOptions.max_rank)
+    events_per_second: float = float("nan")
+    max_residual: float = 0.0  #: the largest relative residual of a recorded state
+
+
+@dataclass(frozen=True)
 class FractureResult:
     """What :func:`dvstatic.fracture` returns.
 
@@ -89,10 +109,10 @@ class FractureResult:
         "force" or "displacement".
     strength : ndarray, shape (n_bonds,)
         First-crack strength of every bond (force).
-    seconds : dict
+    seconds : FractureTimings
         Wall time per stage.
-    stats : dict
-        Factorisations, largest update rank, events per second.
+    stats : FractureStats
+        Factorisations, largest update rank, events per second, largest residual.
     supports, loads : tuple
         The problem's supports and reference loads (scaled by each event's load factor).
 
@@ -111,8 +131,8 @@ class FractureResult:
     message: str
     control: str
     strength: np.ndarray
-    seconds: dict = field(default_factory=dict)
-    stats: dict = field(default_factory=dict)
+    seconds: FractureTimings = field(default_factory=FractureTimings)
+    stats: FractureStats = field(default_factory=FractureStats)
     supports: tuple = ()
     loads: tuple = ()
 
@@ -197,6 +217,6 @@ class FractureResult:
             "peak": None if peak is None else asdict(peak),
             "dissipated": self.dissipated,
             "events": [asdict(e) for e in self.events],
-            "seconds": self.seconds,
-            "stats": self.stats,
+            "seconds": asdict(self.seconds),
+            "stats": asdict(self.stats),
         }

@@ -28,7 +28,7 @@ from ..solvers.options import options_docstring
 from .criteria import criterion_for, per_bond
 from .options import FractureOptions
 from .pieces import Pieces, bond_triangles
-from .result import Event, FractureResult, Snapshot
+from .result import Event, FractureResult, FractureStats, FractureTimings, Snapshot
 from .strength import MIN_EXCESS, Weibull, smallest_gf, teeth_at
 from .updates import UpdatedSolver
 
@@ -431,13 +431,13 @@ class _Analysis:
             message=message,
             control=self.control,
             strength=self.s0,
-            seconds=timings,
-            stats={
-                "factorisations": self.solver.factorisations,
-                "max_rank": self.opts.max_rank,
-                "events_per_second": len(events) / loop if loop > 0 else float("nan"),
-                "max_residual": max((ev.residual for ev in events), default=0.0),
-            },
+            seconds=FractureTimings(**timings),
+            stats=FractureStats(
+                factorisations=self.solver.factorisations,
+                max_rank=self.opts.max_rank,
+                events_per_second=len(events) / loop if loop > 0 else float("nan"),
+                max_residual=max((ev.residual for ev in events), default=0.0),
+            ),
         )
 
 

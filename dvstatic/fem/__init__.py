@@ -32,7 +32,7 @@ import numpy as np
 from .._checks import check_int, check_positive
 from ..errors import InputError, SingularError
 from ..lattice import VoronoiModel
-from ..linalg import DirectSolver, nested_dissection
+from ..linalg import DirectSolver, SolveRecord, nested_dissection
 from ..material import Elastic, lame_plane_stress
 from ..mesh import Mesh
 from ..problem import (
@@ -46,6 +46,7 @@ from ..problem import (
     select_nodes,
     support_components,
 )
+from ..solvers.info import Record
 from .compare import Comparison, compare
 from .mesh import FEMesh, build
 
@@ -55,11 +56,42 @@ if TYPE_CHECKING:  # annotations only: scipy is imported where it is used
 
 log = logging.getLogger(__name__)
 
-__all__ = ["lame_plane_stress", "FESolution", "solve", "Comparison", "compare"]
+__all__ = [
+    "lame_plane_stress",
+    "FESolution",
+    "FEInfo",
+    "FETimings",
+    "solve",
+    "Comparison",
+    "compare",
+]
 
 
 #: most uniform refinements of the FE reference (the library's and the scene's limit)
 MAX_REFINE = 8
+
+
+@dataclass(frozen=True)
+class FETimings(Record):
+    """Wall-clock seconds of an FE reference's stages."""
+
+    mesh: float = 0.0  #: refinement, the FE mesh and its basis
+    assembly: float = 0.0  #: stiffness, loads, supports
+    solve: float = 0.0  #: the direct solve (with iterative refinement)
+    total: float = 0.0
+
+
+@dataclass(frozen=True)
+class FEInfo(Record):
+    """What an FE reference reports (``info["key"]`` still works, deprecated)."""
+
+    n_dof: int
+    n_elements: int
+    lame: tuple  #: in-plane (lambda, mu) of the first element
+    plane: str
+    thickness: float
+    load_resultant: np.ndarray  #: total applied force (fx, fy)
+    seconds: FETimings
 
 
 @dataclass(frozen=True, eq=False)
@@ -73,9 +105,9 @@ class FESolution:
     u : ndarray, shape (N, 2)
         Displacement at the lattice nodes.
     order, refine : int
-    info : dict
+    info : FEInfo
         ``n_dof``, ``n_elements``, ``lame``, ``load_resultant`` (total applied force),
-        ``seconds`` per stage (mesh, assembly, solve).
+        ``seconds`` per stage (:class:`FETimings`: mesh, assembly, solve, total).
     basis : skfem.Basis
         The vector basis (for your own post-processing with scikit-fem).
     x : ndarray
@@ -90,7 +122,7 @@ class FESolution:
     u: np.ndarray
     order: int
     refine: int
-    info: dict
+    info: FEInfo
     basis: object
     x: np.ndarray
     fe_mesh: FEMesh
@@ -316,15 +348,15 @@ def solve(
     t3 = time.perf_counter()
     nodal = basis.nodal_dofs
     u = np.c_[x[nodal[0, : mesh.n_points]], x[nodal[1, : mesh.n_points]]]
-    info = {
-        "n_dof": int(basis.N),
-        "n_elements": int(fe.triangles.shape[0]),
-        "lame": (float(lame[0][0]), float(lame[1][0])),
-        "plane": plane,
-        "thickness": t,
-        "load_resultant": _resultant(basis, f),
-        "seconds": {"mesh": t1 - t0, "assembly": t2 - t1, "solve": t3 - t2, "total": t3 - t0},
-    }
+    info = FEInfo(
+        n_dof=int(basis.N),
+        n_elements=int(fe.triangles.shape[0]),
+        lame=(float(lame[0][0]), float(lame[1][0])),
+        plane=plane,
+        thickness=t,
+        load_resultant=_resultant(basis, f),
+        seconds=FETimings(t1 - t0, t2 - t1, t3 - t2, t3 - t0),
+    )
     log.info("FE P%d refine=%d: %d dof in %.3f s", order, refine, basis.N, t3 - t0)
     return FESolution(mesh, u, order, refine, info, basis, x, fe, lame)
 
@@ -567,24 +599,22 @@ def _solve_spd(A: sp.spmatrix, b: np.ndarray, locs: np.ndarray) -> np.ndarray:
         x = x + dx
         r = b - A @ x
         nb = float(np.linalg.norm(b)) or 1.0
-        info = {
-            "residuals": [float(np.linalg.norm(r)) / nb],
-            "backward_error": float(np.linalg.norm(r))
-            / (_norm1(A) * float(np.linalg.norm(x)) + nb),
-        }
+        nr = float(np.linalg.norm(r))
+        info = SolveRecord(0, [nr / nb], nr / (_norm1(A) * float(np.linalg.norm(x)) + nb))
     if not _good(x, info):
         raise SingularError(
-            f"FE solve failed (relative residual {info['residuals'][-1]:.2e}, backward error "
-            f"{info.get('backward_error', float('nan')):.2e}): the FE system is singular"
+            f"FE solve failed (relative residual {info.residuals[-1]:.2e}, backward error "
+            f"{info.backward_error:.2e}): the FE system is singular"
         )
     return x
 
 
-def _good(x: np.ndarray, info: dict) -> bool:
+def _good(x: np.ndarray, info: SolveRecord) -> bool:
     """A finite solution with a small residual, or a backward error at rounding level."""
     if not np.all(np.isfinite(x)):
         return False
-    return info["residuals"][-1] <= 1e-8 or info.get("backward_error", np.inf) <= 1e-13
+    backward = np.inf if np.isnan(info.backward_error) else info.backward_error
+    return info.residuals[-1] <= 1e-8 or backward <= 1e-13
 
 
 def _norm1(A) -> float:

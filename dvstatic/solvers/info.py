@@ -11,7 +11,15 @@ from __future__ import annotations
 import warnings
 from dataclasses import asdict, dataclass, field, fields
 
-__all__ = ["SolveInfo", "NewtonStep", "StabilityCheck", "Timings", "LinearSolve", "ParallelInfo"]
+__all__ = [
+    "SolveInfo",
+    "NewtonStep",
+    "StabilityCheck",
+    "Timings",
+    "LinearSolve",
+    "ParallelInfo",
+    "Record",
+]
 
 
 class _Record:
@@ -48,6 +56,10 @@ class _Record:
     def as_dict(self) -> dict:
         """Plain nested dict (JSON-ready apart from numpy scalars)."""
         return asdict(self)
+
+
+#: the base of typed records that still answer ``record["key"]`` (deprecated)
+Record = _Record
 
 
 def _dictish(value):

@@ -119,17 +119,18 @@ def solve_linear(model: VoronoiModel, kind: str, dofs, values, f, opts, supports
     else:
         x, rec = engine.solve(b, rtol=opts.rtol, maxiter=opts.linear_maxiter())
     t2 = time.perf_counter()
-    if rec.get("indefinite"):
+    if rec.indefinite:
         raise UnstableError(
             unstable_message(model, None, supports),
-            SolveInfo(kind, stability=stab, iterations=rec["iterations"]),
+            SolveInfo(kind, stability=stab, iterations=rec.iterations),
         )
-    residual = rec["residuals"][-1]
+    residual = rec.residuals[-1]
+    backward = None if np.isnan(rec.backward_error) else rec.backward_error
     result = LinearResult(
-        rec["iterations"],
-        tuple(rec["residuals"]),
+        rec.iterations,
+        tuple(rec.residuals),
         residual,
-        rec.get("backward_error"),
+        backward,
         stab,
         reused,
         t1 - t0,
