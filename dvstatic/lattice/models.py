@@ -277,8 +277,8 @@ class VoronoiModel:
             if self.micros != micros:
                 raise InputError("the model is calibrated already, with other parameters", "micro")
             return
-        self.__dict__["micros"] = micros  # the cached_properties' slots
-        self.__dict__["micro"] = micros[0]
+        object.__setattr__(self, "micros", micros)  # the cached_properties, set once
+        object.__setattr__(self, "micro", micros[0])
 
     @property
     def is_calibrated(self) -> bool:

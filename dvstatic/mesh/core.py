@@ -142,7 +142,7 @@ class Mesh:
             arr.setflags(write=False)
         areas = 0.5 * a2
         areas.setflags(write=False)
-        self.__dict__["triangle_areas"] = areas  # cached_property slot, computed here
+        object.__setattr__(self, "triangle_areas", areas)  # the cached_property, computed here
         object.__setattr__(self, "points", p)
         object.__setattr__(self, "triangles", t)
         object.__setattr__(self, "period", period)
