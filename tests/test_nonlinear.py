@@ -181,6 +181,7 @@ def test_elastica_reference_values():
     assert el.elastica_tip(1e-4)[0] == pytest.approx(1e-4 / 3, rel=1e-4)
 
 
+@pytest.mark.slow  # 26 s: validation/elastica.py --quick (also in `dvstatic validate --quick`)
 def test_elastica_lattice_16_rows(tmp_path):
     el = _load_validation("elastica")
     out = tmp_path / "elastica.json"

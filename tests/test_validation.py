@@ -70,6 +70,7 @@ def test_fig09(out):
         assert d["lines"]["mid"][f"{kind}_rel_error_uy"] < 0.06
 
 
+@pytest.mark.slow  # 23 s (with the next test; also in `dvstatic validate --quick`)
 def test_fig10(out):
     _run("fig10_error_vs_sigma", out)
     d = _json(out, "fig10")
@@ -83,6 +84,7 @@ def test_fig10(out):
     assert dv_stable[-1] > 3 * dv_stable[0]
 
 
+@pytest.mark.slow  # reads test_fig10's output
 def test_fig10_defaults_flatten_the_error(out):
     d = json.loads((out / "fig10.json").read_text())
     for kind in ("DV", "RV"):
@@ -96,6 +98,7 @@ def test_fig10_defaults_flatten_the_error(out):
     assert len(d["runs"]["paper"]["cvt"]) == 3
 
 
+@pytest.mark.slow  # 23 s: validation/stability_sweep.py --quick
 def test_stability_sweep(out):
     _run("stability_sweep", out)
     d = json.loads((out / "stability_sweep.json").read_text())
