@@ -3,6 +3,7 @@ strength relation, the event loop's equilibrium and update path, the benchmarks 
 miniature, and bad input."""
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -657,3 +658,19 @@ def test_the_vtu_series_carries_the_virial_stress(tmp_path):
     g = res.model.geometry
     area = np.where(g.cell_area > 0.25 * g.dual_area, g.cell_area, g.dual_area)
     assert np.sum(first[:, 0] * area) / area.sum() == pytest.approx(lam, rel=0.02)
+
+
+def test_a_time_limit_stops_the_loop_and_keeps_the_events():
+    sup, loads = pulled()
+    model = dv.DV(plate(0.1), E=E, nu=NU)
+    res = dv.fracture(model, sup, loads, ft=FT, gf=2e-3, max_events=500, max_seconds=1e-9)
+    assert res.stop_reason == "time_limit" and len(res.events) == 1
+    assert "time limit" in res.message and res.snapshots[-1].event == 0
+    with pytest.raises(dv.InputError) as err:
+        dv.fracture(model, sup, loads, ft=FT, max_seconds=0.0)
+    assert err.value.param == "max_seconds"
+    sc = dv.scene.load(
+        Path(__file__).resolve().parents[1] / "examples" / "notched_beam.toml",
+        ["fracture.max_seconds=30"],
+    )
+    assert sc.fracture_options()["options"].max_seconds == 30.0

@@ -14,7 +14,7 @@ import math
 import numbers
 from dataclasses import dataclass
 
-from .._checks import check_choice, check_int, check_real
+from .._checks import check_choice, check_int, check_positive, check_real
 from ..errors import InputError
 from ..solvers.options import option
 from .criteria import CRITERIA, REGISTRY
@@ -60,6 +60,12 @@ class FractureOptions:
         "factorised afresh (0: refactorise at every event, the reference path)",
         "int",
     )
+    max_seconds: float | None = option(
+        None,
+        "stop the event loop after this many seconds of wall time (> 0; None: no limit), "
+        "keeping the events so far (`stop_reason` `time_limit`)",
+        "number",
+    )
     snapshots: int = option(
         50,
         "about this many states kept for the VTU series (>= 1), spread over the events "
@@ -80,6 +86,8 @@ class FractureOptions:
         check_int("teeth", self.teeth, minimum=2, maximum=1000)
         check_int("max_rank", self.max_rank, minimum=0, maximum=MAX_RANK)
         check_int("snapshots", self.snapshots, minimum=1)
+        if self.max_seconds is not None:
+            check_positive("max_seconds", self.max_seconds)
         if self.snapshot_every is not None:
             check_int("snapshot_every", self.snapshot_every, minimum=1)
         _fraction("stop_load_ratio", self.stop_load_ratio, closed=False)

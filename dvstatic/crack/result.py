@@ -101,8 +101,9 @@ class FractureResult:
         Broken bonds, in the order they broke.
     snapshots : tuple of Snapshot
     stop_reason : str
-        "max_events", "load_drop", "separated", "interrupted" or "no_tension" (no
-        unbroken bond is loaded towards its strength).
+        "max_events", "load_drop", "separated", "interrupted", "time_limit"
+        (``FractureOptions.max_seconds``) or "no_tension" (no unbroken bond is loaded
+        towards its strength).
     message : str
         One line saying why the analysis stopped.
     control : str

@@ -460,6 +460,11 @@ def _run(model, sp_, criterion, s0, energy, problem, timings, t_start, opts) -> 
                     broken=len(run.broken),
                     refresh=False,
                 )
+            if stop is None and opts.max_seconds and time.perf_counter() - t0 > opts.max_seconds:
+                stop = (
+                    "time_limit",
+                    (f"stopped at the time limit of {opts.max_seconds:g} s after {k + 1} events"),
+                )
             if stop is not None:
                 reason, message = stop
                 break
