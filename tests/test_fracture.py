@@ -674,3 +674,33 @@ def test_a_time_limit_stops_the_loop_and_keeps_the_events():
         ["fracture.max_seconds=30"],
     )
     assert sc.fracture_options()["options"].max_seconds == 30.0
+
+
+def test_the_event_loop_runs_on_one_blas_thread(monkeypatch):
+    """By default the loop's dense algebra runs on one BLAS thread (blas_threads=1), left
+    to the library with None; a bad count is refused with its name."""
+    from threadpoolctl import threadpool_info
+
+    from dvstatic.crack import sla
+
+    if not [p for p in threadpool_info() if p["user_api"] == "blas"]:
+        pytest.skip("no BLAS thread pool that threadpoolctl can see")
+    seen = []
+    real = sla._Analysis.step
+
+    def step(self, k):
+        seen.append(max(p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"))
+        return real(self, k)
+
+    monkeypatch.setattr(sla._Analysis, "step", step)
+    sup, loads = pulled()
+    model = dv.DV(plate(0.2), E=E, nu=NU)
+    dv.fracture(model, sup, loads, ft=FT, max_events=2)
+    assert seen and set(seen) == {1}
+    outside = max(p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas")
+    seen.clear()
+    dv.fracture(model, sup, loads, ft=FT, max_events=2, blas_threads=None)
+    assert set(seen) == {outside}
+    with pytest.raises(dv.InputError) as err:
+        dv.fracture(model, sup, loads, ft=FT, blas_threads=0)
+    assert err.value.param == "blas_threads"

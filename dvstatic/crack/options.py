@@ -66,6 +66,13 @@ class FractureOptions:
         "keeping the events so far (`stop_reason` `time_limit`)",
         "number",
     )
+    blas_threads: int | None = option(
+        1,
+        "threads of the dense algebra in the event loop (the low-rank updates' small "
+        "solves; >= 1): 1 by default, as many threads fight for the cores of a shared "
+        "machine and gain nothing on these sizes; None: as the BLAS library decides",
+        "int",
+    )
     snapshots: int = option(
         50,
         "about this many states kept for the VTU series (>= 1), spread over the events "
@@ -86,6 +93,8 @@ class FractureOptions:
         check_int("teeth", self.teeth, minimum=2, maximum=1000)
         check_int("max_rank", self.max_rank, minimum=0, maximum=MAX_RANK)
         check_int("snapshots", self.snapshots, minimum=1)
+        if self.blas_threads is not None:
+            check_int("blas_threads", self.blas_threads, minimum=1)
         if self.max_seconds is not None:
             check_positive("max_seconds", self.max_seconds)
         if self.snapshot_every is not None:

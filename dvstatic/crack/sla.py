@@ -451,23 +451,10 @@ def _run(model, sp_, criterion, s0, energy, problem, timings, t_start, opts) -> 
     run.start()
     bar = _bar(opts.progress, n)
     try:
-        for k in range(n):
-            stop = run.step(k)
-            if bar is not None:
-                bar.update(1)
-                bar.set_postfix(
-                    load=f"{run.events[-1].load:.4g}" if run.events else "",
-                    broken=len(run.broken),
-                    refresh=False,
-                )
-            if stop is None and opts.max_seconds and time.perf_counter() - t0 > opts.max_seconds:
-                stop = (
-                    "time_limit",
-                    (f"stopped at the time limit of {opts.max_seconds:g} s after {k + 1} events"),
-                )
-            if stop is not None:
-                reason, message = stop
-                break
+        with _blas_threads(opts.blas_threads):
+            stop = _loop(run, n, bar, opts, t0)
+        if stop is not None:
+            reason, message = stop
     except KeyboardInterrupt:
         reason, message = "interrupted", f"interrupted after {len(run.events)} events"
         log.warning("fracture: %s; returning what was computed", message)
@@ -479,6 +466,38 @@ def _run(model, sp_, criterion, s0, energy, problem, timings, t_start, opts) -> 
     timings["factorisation"] = run.solver.factor_seconds
     log.info("fracture: %d events, %d bonds broken, %s", len(run.events), len(run.broken), message)
     return run.result(reason, message, timings, loop)
+
+
+def _loop(run, n: int, bar, opts, t0: float):
+    """Events 0 .. n-1 (or until a stop, returned as (reason, message))."""
+    for k in range(n):
+        stop = run.step(k)
+        if bar is not None:
+            bar.update(1)
+            bar.set_postfix(
+                load=f"{run.events[-1].load:.4g}" if run.events else "",
+                broken=len(run.broken),
+                refresh=False,
+            )
+        if stop is None and opts.max_seconds and time.perf_counter() - t0 > opts.max_seconds:
+            stop = (
+                "time_limit",
+                (f"stopped at the time limit of {opts.max_seconds:g} s after {k + 1} events"),
+            )
+        if stop is not None:
+            return stop
+    return None
+
+
+def _blas_threads(threads: int | None):
+    """The BLAS thread pools limited to ``threads`` (None: left as they are)."""
+    import contextlib
+
+    if threads is None:
+        return contextlib.nullcontext()
+    from threadpoolctl import threadpool_limits
+
+    return threadpool_limits(limits=threads, user_api="blas")
 
 
 def _stop(pieces, d, removed, ends, model, ev, peak, res, ratio, k, stiffness):
