@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import dvstatic as dv
-from dvstatic import cli, io, plot
+from dvstatic import cli, io, pictures, plot
 from dvstatic.scene import SceneError
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
@@ -39,7 +39,7 @@ def test_the_colour_range_is_that_of_the_nodes_in_view(tmp_path, monkeypatch):
     real = plot.robust_range
     monkeypatch.setattr(plot, "robust_range", lambda f: seen.setdefault("n", len(f)) and real(f))
     io.write_png(tmp_path / "a.png", sol, field="sxx")
-    inside = io._inside(sol.model.mesh.points, io.picture_view(sol, field="sxx"))
+    inside = pictures._inside(sol.model.mesh.points, io.picture_view(sol, field="sxx"))
     assert seen["n"] == inside.sum() < sol.model.mesh.n_points
 
 
@@ -48,7 +48,7 @@ def test_point_load_neighbourhoods_do_not_take_the_colour_range():
     sup = [dv.Fix(at=(0, 1), x=0), dv.Fix(at=(0, -1), x=0), dv.Fix(at=(1, 0), y=0)]
     loads = [dv.PointLoad(at=(0, 1), value=(0, -1.0)), dv.PointLoad(at=(0, -1), value=(0, 1.0))]
     sol = dv.solve(dv.DV(mesh, 1e5, 0.2), sup, loads)
-    near = io.near_point_loads(sol)
+    near = pictures.near_point_loads(sol)
     assert 0 < near.sum() < 0.1 * mesh.n_points
     sxx = sol.stress()[:, 0, 0]
     lo, hi, _ = plot.robust_range(sxx[~near])

@@ -46,8 +46,8 @@ from ..problem import (
     select_nodes,
     support_components,
 )
-from ..solvers.info import Record
 from .compare import Comparison, compare
+from .info import FEInfo, FETimings
 from .mesh import FEMesh, build
 
 if TYPE_CHECKING:  # annotations only: scipy is imported where it is used
@@ -69,29 +69,6 @@ __all__ = [
 
 #: most uniform refinements of the FE reference (the library's and the scene's limit)
 MAX_REFINE = 8
-
-
-@dataclass(frozen=True)
-class FETimings(Record):
-    """Wall-clock seconds of an FE reference's stages."""
-
-    mesh: float = 0.0  #: refinement, the FE mesh and its basis
-    assembly: float = 0.0  #: stiffness, loads, supports
-    solve: float = 0.0  #: the direct solve (with iterative refinement)
-    total: float = 0.0
-
-
-@dataclass(frozen=True)
-class FEInfo(Record):
-    """What an FE reference reports (``info["key"]`` still works, deprecated)."""
-
-    n_dof: int
-    n_elements: int
-    lame: tuple  #: in-plane (lambda, mu) of the first element
-    plane: str
-    thickness: float
-    load_resultant: np.ndarray  #: total applied force (fx, fy)
-    seconds: FETimings
 
 
 @dataclass(frozen=True, eq=False)

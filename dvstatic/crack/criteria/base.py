@@ -11,6 +11,7 @@ its name is then accepted by ``dv.fracture(criterion=...)`` and the scene.
 from __future__ import annotations
 
 import time
+from abc import ABC, abstractmethod
 from typing import ClassVar
 
 import numpy as np
@@ -35,8 +36,9 @@ def criterion_for(name: str, model, sp_) -> Criterion:
     return REGISTRY[name](model, sp_)
 
 
-class Criterion:
-    """Base of the breaking criteria (not used directly).
+class Criterion(ABC):
+    """Base of the breaking criteria (abstract: a criterion defines :meth:`thresholds`
+    and :meth:`__call__`).
 
     Parameters
     ----------
@@ -63,16 +65,16 @@ class Criterion:
         covered)) under the unit uniform stresses xx, yy, xy."""
         self.h = h
 
+    @abstractmethod
     def thresholds(self, s_tension, ftb, factors) -> np.ndarray:
         """First-crack threshold of every bond in the criterion's units, from the
         tension-based strengths ``s_tension`` (force), the tensile strength per bond
         ``ftb`` and the random-field ``factors`` (None: uniform)."""
-        raise NotImplementedError
 
+    @abstractmethod
     def __call__(self, x, w, g, intact=None) -> np.ndarray:
         """What every intact bond compares with its threshold, shape (n_bonds,), in the
         state ``x`` (per unit load factor) of the damaged stiffness ``w, g``."""
-        raise NotImplementedError
 
     # ------------------------------------------------------------------ shared
     def prepare(self, model, ft, weibull, timings: dict, dofs=None):

@@ -1,0 +1,35 @@
+"""What an FE reference reports: :class:`FEInfo` and :class:`FETimings` (typed; the old
+``info["key"]`` still answers, with a DeprecationWarning)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..solvers.info import Record
+
+__all__ = ["FEInfo", "FETimings"]
+
+
+@dataclass(frozen=True)
+class FETimings(Record):
+    """Wall-clock seconds of an FE reference's stages."""
+
+    mesh: float = 0.0  #: refinement, the FE mesh and its basis
+    assembly: float = 0.0  #: stiffness, loads, supports
+    solve: float = 0.0  #: the direct solve (with iterative refinement)
+    total: float = 0.0
+
+
+@dataclass(frozen=True)
+class FEInfo(Record):
+    """What an FE reference reports (``info["key"]`` still works, deprecated)."""
+
+    n_dof: int
+    n_elements: int
+    lame: tuple  #: in-plane (lambda, mu) of the first element
+    plane: str
+    thickness: float
+    load_resultant: np.ndarray  #: total applied force (fx, fy)
+    seconds: FETimings
