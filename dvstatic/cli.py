@@ -125,6 +125,7 @@ def _run_fracture(sc, model, supports, loads, folder, args, say, t0: float) -> i
     from .report import fracture_checks, fracture_lines
 
     opts = sc.fracture_options()
+    opts["held"] = sc.build_loads(model.mesh, held=True) or None
     n = opts["options"].max_events
     say(
         f"fracture ({model.kind}, {2 * model.mesh.n_points} dof, up to {n} events; Ctrl-C "
@@ -236,6 +237,8 @@ def _fracture_key(sc, param: str) -> str:
     """The scene key of an input error of ``dv.fracture`` (``param`` as it names it)."""
     if param in ("supports", "loads", "mesh", "model"):
         return param
+    if param == "held":
+        return "fracture.held"
     name, _, region = param.partition("[")
     region = region.strip("'\"]")
     for i, r in enumerate(sc.data["fracture"]["regions"]):

@@ -262,7 +262,8 @@ def write_fracture_series(folder: str | Path, result, name: str = "fracture") ->
 
     One ``<name>_NNNN.vtu`` per snapshot (and the final state) in ``folder``, listed
     with their event numbers as times in ``<name>.pvd`` (open that one). Each holds the
-    bonds as line cells with ``stiffness`` (1 intact, 0 broken), ``broken`` (0/1) and
+    bonds as line cells with ``stiffness`` (1 intact, 0 broken), ``broken`` (0/1),
+    ``mode`` (how a broken bond failed: 0 intact, 1 tension, 2 shear, 3 crushing) and
     ``strength`` (force), and the nodes with ``displacement`` (at the event's critical
     load), ``damage`` (mean stiffness loss of the node's bonds) and ``stress_virial``
     (N, 9: the damaged lattice's bond forces over each Voronoi cell; the recovered
@@ -280,8 +281,13 @@ def write_fracture_series(folder: str | Path, result, name: str = "fracture") ->
     mesh = result.model.mesh
     bonds = mesh.topology.bonds
     pts = np.c_[mesh.points, np.zeros(mesh.n_points)]
+    from .crack.criteria import MODES
     from .stress.virial import node_stress
 
+    code = np.zeros(mesh.n_bonds, dtype=np.int8)
+    for ev in result.events:
+        if ev.broken:
+            code[ev.bond] = 1 + MODES.index(ev.mode)
     states = [(s.event, s.u, s.stiffness) for s in result.snapshots]
     last = len(result.events)
     states.append((last, result.u, result.stiffness))
@@ -300,6 +306,7 @@ def write_fracture_series(folder: str | Path, result, name: str = "fracture") ->
             cell_data={
                 "stiffness": [d],
                 "broken": [(d <= 0).astype(np.int8)],
+                "mode": [np.where(d <= 0, code, 0).astype(np.int8)],
                 "strength": [result.strength],
             },
         )

@@ -327,11 +327,23 @@ def crack_faces(result, bonds=None) -> tuple[np.ndarray, np.ndarray]:
     return np.stack([a, b], axis=1), bonds
 
 
+#: colours of the failure modes in the crack picture
+_MODE_COLOURS = {"tension": "tab:blue", "shear": "tab:green", "crushing": "tab:red"}
+
+
+def _break_modes(result) -> list[str]:
+    """The failure mode of every broken bond (in ``result.broken``'s order): the mode of
+    the event that removed it."""
+    by_bond = {e.bond: e.mode for e in result.events if e.broken}
+    return [by_bond.get(int(b), "tension") for b in result.broken]
+
+
 def write_crack_png(path: str | Path, result, title: str | None = None) -> Path:
     """The crack pattern of a fracture analysis as a PNG, atomically: the body's
-    outline, the Voronoi faces of the broken bonds coloured by the order they broke,
-    those of softened (cracked, not yet broken) bonds in grey; a crack in a small part
-    of the body is framed."""
+    outline, the Voronoi faces of the broken bonds coloured by the order they broke (by
+    failure mode, tension / shear / crushing, when faces failed other than in
+    tension), those of softened (cracked, not yet broken) bonds in grey; a crack in a
+    small part of the body is framed."""
     from matplotlib.collections import LineCollection
 
     from . import plot
@@ -348,7 +360,16 @@ def write_crack_png(path: str | Path, result, title: str | None = None) -> Path:
     plot.draw_interfaces(ax, mesh, result.model.material_of_triangle)
     if len(soft):
         ax.add_collection(LineCollection(soft_faces, colors="0.6", linewidths=0.8))
-    if len(faces):
+    modes = _break_modes(result)
+    if len(faces) and any(m != "tension" for m in modes):
+        for mode, colour in _MODE_COLOURS.items():
+            sel = [i for i, m in enumerate(modes) if m == mode]
+            if sel:
+                ax.add_collection(
+                    LineCollection(faces[sel], colors=colour, linewidths=1.6, label=mode)
+                )
+        ax.legend(fontsize=8, title="failure mode", title_fontsize=8, loc="best")
+    elif len(faces):
         lc = LineCollection(faces, array=np.arange(len(faces)), cmap="plasma", linewidths=1.6)
         ax.add_collection(lc)
         fig.colorbar(lc, ax=ax, shrink=0.8, label="order of breaking (bonds)")

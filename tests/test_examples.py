@@ -292,9 +292,15 @@ def test_brazilian_fracture_scene(tmp_path):
     ],
 )
 def test_fracture_scene_errors_name_the_key(tmp_path, old, new, key):
-    scene = (EXAMPLES / "notched_beam.toml").read_text().replace(old, new, 1)
+    _scene_error_names(tmp_path, "notched_beam", old, new, key)
+
+
+def _scene_error_names(tmp_path, example, old, new, key):
+    """The example with ``old`` replaced by ``new`` fails with one line naming ``key``."""
+    scene = (EXAMPLES / f"{example}.toml").read_text()
+    assert old in scene
     path = tmp_path / "bad.toml"
-    path.write_text(scene)
+    path.write_text(scene.replace(old, new, 1))
     proc = subprocess.run(
         [sys.executable, "-m", "dvstatic", "run", str(path), "--out", str(tmp_path / "o")],
         capture_output=True,
@@ -303,3 +309,34 @@ def test_fracture_scene_errors_name_the_key(tmp_path, old, new, key):
     )
     assert proc.returncode == 2, proc.stderr
     assert key in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_confined_compression_scene(tmp_path):
+    """[[fracture.held]] (a confinement held at full value) and criterion mohr-coulomb
+    from a scene: the first failure on the Coulomb envelope sigma_1 = UCS + 3 p."""
+    out = tmp_path / "cc"
+    cmd = [sys.executable, "-m", "dvstatic", "run", str(EXAMPLES / "confined_compression.toml")]
+    cmd += ["--out", str(out), "--quiet", "--set", "mesh.h=0.08", "--set", "fracture.max_events=40"]
+    proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
+    assert proc.returncode == 0, proc.stderr
+    d = json.loads((out / "confined_compression_fracture.json").read_text())
+    assert d["events"][0]["load"] == pytest.approx(20.7846 + 3 * 4.0, rel=0.01)
+    assert d["events"][0]["mode"] in ("crushing", "shear")
+    assert d["modes"]["crushing"] > 0
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "key"),
+    [
+        ("cohesion = 6.0", "cohesion = -6.0", "fracture.cohesion"),
+        ("friction_angle = 30.0", "friction_angle = 80.0", "fracture.friction_angle"),
+        ('criterion = "mohr-coulomb"', 'criterion = "stress"', "fracture.cohesion"),
+        (
+            'where = "left"\np = 4.0',
+            'where = "left"\np = 4.0\nvalue = [1.0, 0.0]',
+            "fracture.held[0].value",
+        ),
+    ],
+)
+def test_compression_scene_errors_name_the_key(tmp_path, old, new, key):
+    _scene_error_names(tmp_path, "confined_compression", old, new, key)

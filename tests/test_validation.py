@@ -174,3 +174,15 @@ def test_stress_quick(out):
     for row in d["lame"]:
         assert row["hoop_rms"] < 0.08
     assert all(abs(r["first_break_over_ft"] - 1) < 0.02 for r in d["tension"])
+
+
+@pytest.mark.slow
+def test_compression(out):
+    _run("compression", out)
+    d = _json(out, "compression")
+    for row in d["uniaxial"] + d["pairs"]:
+        assert row["peak_over_envelope"] == pytest.approx(1.0, abs=0.15)
+    assert d["biaxial"]["slope_peak"] == pytest.approx(d["biaxial"]["slope_mc"], rel=0.2)
+    assert max(r["held_equilibrium"] for r in d["biaxial"]["rows"]) < 1e-9
+    assert d["brazilian"]["splitting_over_ft"] == pytest.approx(1.0, abs=0.15)
+    assert d["brazilian"]["near_diameter"] > 0.5

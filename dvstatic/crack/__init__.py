@@ -1,6 +1,6 @@
 """Quasi-static fracture of DV/RV lattices by bond breaking, event by event.
 
-``dv.fracture(model, supports, loads, ft=..., gf=None, max_events=...)`` (options:
+``dv.fracture(model, supports, loads, held=None, ft=..., gf=None, max_events=...)`` (options:
 :class:`.FractureOptions`, :mod:`.options`) runs a
 sequentially linear analysis (:mod:`.sla`) with bond strengths derived from the
 material's tensile strength (:mod:`.strength`), optional saw-tooth softening with a
@@ -8,6 +8,7 @@ fracture energy, and factorisation updates between events (:mod:`.updates`). Wha
 breaking a bond does to the DV/RV force law is in :mod:`dvstatic.lattice.damage`.
 """
 
+from .criteria.mohr_coulomb import ucs
 from .options import FractureOptions
 from .result import Event, FractureResult, FractureStats, FractureTimings, Snapshot
 from .sla import EQUILIBRIUM_TOL, fracture
@@ -23,4 +24,5 @@ __all__ = [
     "FractureStats",
     "Snapshot",
     "EQUILIBRIUM_TOL",
+    "ucs",
 ]

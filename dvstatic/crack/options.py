@@ -33,9 +33,11 @@ class FractureOptions:
     criterion: str = option(
         "stress",
         "what an intact bond compares with its strength: `stress`, the normal stress across "
-        "its Voronoi face (a Rankine criterion, unaffected by compression along the face), "
-        "or `tension`, its tension (which compression along the face raises: under tension "
-        "`s` and compression `3 s` it cracks at about `ft / 2.6`)",
+        "its Voronoi face (a Rankine criterion, unaffected by compression along the face); "
+        "`tension`, its tension (which compression along the face raises: under tension "
+        "`s` and compression `3 s` it cracks at about `ft / 2.6`); or `mohr-coulomb`, "
+        "Coulomb's line `|tau| + sigma_n tan(phi) = c` with the tension cut-off `ft` on the "
+        "face (needs `cohesion` and `friction_angle`)",
         "string",
         CRITERIA,
     )

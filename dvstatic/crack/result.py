@@ -6,6 +6,8 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from .criteria import MODES
+
 __all__ = ["Event", "Snapshot", "FractureResult", "FractureTimings", "FractureStats"]
 
 
@@ -41,6 +43,15 @@ class Event:
     spring_lost : float
         The part of the bond's spring the event took: its stiffness factor before the
         event minus after it.
+    mode : str
+        How the bond's face failed: "tension", "shear" (Coulomb's line, the face not in
+        compression) or "crushing" (Coulomb's line, the face in compression); cracked
+        bonds soften in tension.
+
+    With held loads, ``load`` and ``control_displacement`` are those of the whole state
+    (held + ``load_factor`` x reference): force control, the growing load and the
+    displacement along it; displacement control, the reactions (the held loads' part
+    included) and the control displacement.
     """
 
     index: int
@@ -54,6 +65,7 @@ class Event:
     released: float = float("nan")
     elongation: float = float("nan")
     spring_lost: float = float("nan")
+    mode: str = "tension"
 
 
 @dataclass(frozen=True)
@@ -116,6 +128,8 @@ class FractureResult:
         Factorisations, largest update rank, events per second, largest residual.
     supports, loads : tuple
         The problem's supports and reference loads (scaled by each event's load factor).
+    held : tuple
+        The held loads (at full value in every state).
 
     Every state is a model: :meth:`stiffness_at` gives the bond factors at an event,
     :meth:`solution` the :class:`~dvstatic.Solution` of the damaged lattice there (its
@@ -136,6 +150,7 @@ class FractureResult:
     stats: FractureStats = field(default_factory=FractureStats)
     supports: tuple = ()
     loads: tuple = ()
+    held: tuple = ()
 
     def _event(self, k: int) -> int:
         n = len(self.events)
@@ -157,14 +172,15 @@ class FractureResult:
         """The state at event ``k`` (default the last) as a solve: the damaged lattice
         (``model.damaged(stiffness_at(k))``) in equilibrium under the supports and
         loads times the event's load factor (``dv.solve``; ``u`` is the state the event
-        loop recorded, to the solver's tolerance)."""
+        loop recorded, to the solver's tolerance), the held loads at full value."""
         from ..problem import scaled
         from ..solvers import solve
 
         k = self._event(k)
         lam = self.events[k].load_factor
         model = self.model.damaged(self.stiffness_at(k))
-        return solve(model, scaled(list(self.supports), lam), scaled(list(self.loads), lam))
+        loads = scaled(list(self.loads), lam) + list(self.held)
+        return solve(model, scaled(list(self.supports), lam), loads)
 
     def curve(self) -> tuple[np.ndarray, np.ndarray]:
         """The load-displacement curve: ``(control_displacement, load)`` of every event."""
@@ -215,6 +231,7 @@ class FractureResult:
             "message": self.message,
             "n_events": len(self.events),
             "n_broken": int(len(self.broken)),
+            "modes": {m: sum(e.mode == m for e in self.events) for m in MODES},
             "peak": None if peak is None else asdict(peak),
             "dissipated": self.dissipated,
             "events": [asdict(e) for e in self.events],

@@ -1,11 +1,13 @@
 """Event-driven fracture: sequentially linear analysis (SLA) with factorisation updates.
 
 Each event solves the damaged lattice for the reference loads (one unit of the load
-factor), finds the bond whose criterion (:mod:`.criteria`) is the largest fraction of
-its current strength, scales the loads so that this bond reaches its strength exactly,
-records the state and then softens or removes that bond. Every recorded state is an
-exact equilibrium of the linear lattice at its load factor; snap-backs appear in the
-load-displacement curve as they come (the load factor of the next event may be lower).
+factor) and for the held loads (at full value), finds the bond that reaches its
+strength (:mod:`.criteria`) at the smallest load factor under held + factor x reference,
+records that state and then softens or removes that bond. Every recorded state is an
+exact equilibrium of the linear lattice at its load factor with the held loads at full
+value; snap-backs appear in the load-displacement curve as they come (the load factor
+of the next event may be lower). Bonds the held loads alone overload break first, at
+load factor 0, one event each.
 """
 
 from __future__ import annotations
@@ -25,7 +27,7 @@ from ..mesh import Mesh
 from ..problem import Problem
 from ..problem.loads import nodal_forces
 from ..solvers.options import options_docstring
-from .criteria import criterion_for, per_bond
+from .criteria import MODES, REGISTRY, criterion_for, per_bond
 from .options import FractureOptions
 from .pieces import Pieces, bond_triangles
 from .result import Event, FractureResult, FractureStats, FractureTimings, Snapshot
@@ -116,18 +118,21 @@ def _load_measure(mesh, loads, thickness) -> float:
     return own + (0.5 * size if balanced else size)
 
 
-def _state(solver, sp_, d, control, ref, f):
-    """Solve the damaged lattice per unit load factor: displacement, relative residual,
-    and the conjugate (load, displacement) per unit load factor."""
+def _state(solver, sp_, d, control, ref, f, fh=None):
+    """Solve the damaged lattice per unit load factor (``fh`` None) or for the held
+    forces ``fh`` (the supports at rest): displacement, relative residual, and its part
+    of the conjugate (load, displacement): the load factor's coefficients, or the held
+    part's constant terms (force control: no load, the displacement along ``f``;
+    displacement control: the reactions' work on the control, no displacement)."""
     w, g = sp_.factors(d)
-    x, res = solver.solve(w, g, EQUILIBRIUM_TOL)
+    x, res = solver.solve(w, g, EQUILIBRIUM_TOL, fh)
     if control == "force":
-        return x, res, ref, float(f @ x) / ref
+        return x, res, (0.0 if fh is not None else ref), float(f @ x) / ref
     kx = solver.K0 @ x
     if solver.rank:
         kx = kx + solver.delta_full(x, w, g)
-    reaction = (kx - f)[solver.dofs]
-    return x, res, float(reaction @ solver.values) / ref, ref
+    reaction = (kx - (f if fh is None else fh))[solver.dofs]
+    return x, res, float(reaction @ solver.values) / ref, (0.0 if fh is not None else ref)
 
 
 def _check_options(model, weibull) -> None:
@@ -144,27 +149,82 @@ def fracture(
     supports,
     loads=None,
     *,
+    held=None,
     ft,
     gf=None,
+    cohesion=None,
+    friction_angle=None,
     weibull: Weibull | None = None,
     options: FractureOptions | None = None,
     **kwargs,
 ) -> FractureResult:
     opts = FractureOptions.from_kwargs(options, **kwargs)
     _check_options(model, weibull)
+    params = _criterion_parameters(opts.criterion, cohesion=cohesion, friction_angle=friction_angle)
     timings: dict[str, float] = {}
     t_start = time.perf_counter()
     problem = Problem.build(model, supports, loads)
     dofs, values, f, control, ref = _reference(model, problem)
+    held_problem = _held(model, held)
     sp_ = _split(model)
     criterion = criterion_for(opts.criterion, model, sp_)
-    s0, s_tension = criterion.prepare(model, ft, weibull, timings, dofs)
+    s0, s_tension = criterion.prepare(model, ft, weibull, timings, dofs, params)
     energy = None if gf is None else _energies(model, gf, s_tension)
     _warn_rows(model.mesh)
+    fh = None if held_problem is None else held_problem.f
     res = _run(
-        model, sp_, criterion, s0, energy, (dofs, values, f, control, ref), timings, t_start, opts
+        model,
+        sp_,
+        criterion,
+        s0,
+        energy,
+        (dofs, values, f, control, ref, fh),
+        timings,
+        t_start,
+        opts,
     )
-    return dataclasses.replace(res, supports=problem.supports, loads=problem.loads)
+    return dataclasses.replace(
+        res,
+        supports=problem.supports,
+        loads=problem.loads,
+        held=() if held_problem is None else held_problem.loads,
+    )
+
+
+def _criterion_parameters(criterion: str, **given) -> dict:
+    """The given strength keywords of ``criterion``; a keyword another criterion takes
+    is refused rather than ignored."""
+    params = {k: v for k, v in given.items() if v is not None}
+    wrong = sorted(set(params) - set(REGISTRY[criterion].parameters))
+    if wrong:
+        users = [n for n, c in REGISTRY.items() if wrong[0] in c.parameters]
+        raise InputError(
+            f"{wrong[0]} is a strength of criterion {users[0]!r}, not of {criterion!r}: "
+            f"give criterion={users[0]!r} or leave {wrong[0]} out",
+            wrong[0],
+        )
+    return params
+
+
+def _held(model, held) -> Problem | None:
+    """The held loads as a problem without supports (None: no held load).
+
+    Raises
+    ------
+    TypeError
+        A held item that is not a load (a support has no place among them).
+    """
+    if held is None or (isinstance(held, (list, tuple)) and not held):
+        return None
+    items = held if isinstance(held, (list, tuple)) else [held]
+    for item in items:
+        if type(item).__name__ == "Fix":
+            raise TypeError(
+                "held takes loads (Traction, Pressure, BodyForce, PointLoad), not a Fix: "
+                "the supports go in `supports` (their prescribed values grow with the load "
+                "factor)"
+            )
+    return Problem.build(model, None, list(items), restrained=False)
 
 
 def _signature() -> inspect.Signature:
@@ -173,8 +233,11 @@ def _signature() -> inspect.Signature:
         inspect.Parameter("model", inspect.Parameter.POSITIONAL_OR_KEYWORD),
         inspect.Parameter("supports", inspect.Parameter.POSITIONAL_OR_KEYWORD),
         inspect.Parameter("loads", inspect.Parameter.POSITIONAL_OR_KEYWORD, default=None),
+        inspect.Parameter("held", kw, default=None),
         inspect.Parameter("ft", kw),
         inspect.Parameter("gf", kw, default=None),
+        inspect.Parameter("cohesion", kw, default=None),
+        inspect.Parameter("friction_angle", kw, default=None),
         inspect.Parameter("weibull", kw, default=None),
         inspect.Parameter("options", kw, default=None),
     ]
@@ -196,11 +259,22 @@ fracture.__doc__ = f"""Quasi-static fracture by bond breaking, event by event (s
     loads : load or list of loads, optional
         Reference loads (``Traction``, ``Pressure``, ``BodyForce``, ``PointLoad``). The
         loads and the prescribed displacements are multiplied by the load factor.
+    held : load or list of loads, optional
+        Loads applied at full value in every state (self-weight, an in-situ stress, a
+        confining pressure), with the supports at rest; only ``loads`` and the
+        prescribed displacements grow. Bonds the held loads alone break go first, at
+        load factor 0.
     ft : float or dict
         Tensile strength (stress units), or ``{{"default": ft, region: ft_r}}``.
     gf : float or dict, optional
-        Fracture energy (energy per unit crack area, e.g. N/m): a cracked bond softens
-        in ``teeth`` saw-tooth steps. None: brittle bonds (removed at their strength).
+        Fracture energy (energy per unit crack area, e.g. N/m): a bond cracked in
+        tension softens in ``teeth`` saw-tooth steps. None: brittle bonds (removed at
+        their strength). Faces that fail in shear or crushing lose their bond at once.
+    cohesion, friction_angle : float or dict, optional
+        Cohesion (stress units, > 0) and friction angle (degrees, in [0, 70)) of
+        ``criterion="mohr-coulomb"`` (required by it, refused by the others), per region
+        like ``ft``. The continuum's uniaxial compressive strength is
+        ``2 c cos(phi) / (1 - sin(phi))`` (:func:`dvstatic.crack.ucs`).
     weibull : Weibull, optional
         Random strength field.
     options : FractureOptions, optional
@@ -284,8 +358,12 @@ class _Bonds:
         if not had_steps:
             self.steps.pop(e, None)
 
-    def advance(self, e: int, peak: float) -> bool:
-        """Soften or remove bond ``e`` cracking at elongation ``peak``; True if removed."""
+    def advance(self, e: int, peak: float, brittle: bool = False) -> bool:
+        """Soften or remove bond ``e`` cracking at elongation ``peak`` (``brittle``:
+        remove it at once); True if removed."""
+        if brittle:
+            self.d[e] = 0.0
+            return True
         if self.d[e] >= 1.0:
             en = None if self.energy is None else self.energy[e]
             if en is None or peak <= 0 or en <= 0.5 * self.spring[e] * peak**2 * (1 + MIN_EXCESS):
@@ -337,13 +415,14 @@ class _Analysis:
     """The event loop of :func:`fracture`: state, one event, the result."""
 
     def __init__(self, model, sp_, criterion, s0, energy, problem, opts):
-        self.dofs, self.values, self.f, self.control, self.ref = problem
+        self.dofs, self.values, self.f, self.control, self.ref, self.fh = problem
         self.model, self.sp, self.criterion, self.s0, self.opts = model, sp_, criterion, s0, opts
         self.bonds = _Bonds(s0, model.operator.spring, energy, opts.teeth)
         self.solver = UpdatedSolver(
             model.mesh, sp_, self.dofs, self.values, self.f, max_rank=opts.max_rank
         )
-        self.pieces = Pieces(model, self.dofs, self.values, self.f, opts.fragment)
+        loaded = self.f if self.fh is None else np.abs(self.f) + np.abs(self.fh)
+        self.pieces = Pieces(model, self.dofs, self.values, loaded, opts.fragment)
         self.bond_tris = bond_triangles(model.mesh)
         self.snaps = _Kept(opts.snapshots, opts.snapshot_every)
         self.events: list[Event] = []
@@ -357,9 +436,12 @@ class _Analysis:
         self.k_initial = self.p_ref / self.u_ref
 
     def _solve(self) -> None:
-        self.x, self.res, self.p_ref, self.u_ref = _state(
-            self.solver, self.sp, self.bonds.d, self.control, self.ref, self.f
-        )
+        args = (self.solver, self.sp, self.bonds.d, self.control, self.ref, self.f)
+        self.x, self.res, self.p_ref, self.u_ref = _state(*args)
+        self.xh, self.p_held, self.u_held = None, 0.0, 0.0
+        if self.fh is not None:
+            self.xh, res, self.p_held, self.u_held = _state(*args, self.fh)
+            self.res = max(self.res, res)
 
     def step(self, k: int):
         """Event ``k``; returns (reason, message) if the analysis stops, else None. Ctrl-C
@@ -367,13 +449,14 @@ class _Analysis:
         bonds, x = self.bonds, self.x
         w, g = self.sp.factors(bonds.d)
         intact = np.all(bonds.d[self.sp.tri_bonds] >= 1.0, axis=1).astype(float)
-        e, lam, elongation = self.criterion.critical(x, w, g, intact, bonds.d, bonds.threshold)
+        crit = self.criterion.critical(self.xh, x, w, g, intact, bonds.d, bonds.threshold)
+        e, lam = crit.bond, crit.factor
         if not np.isfinite(lam):
             return "no_tension", "no unbroken bond is loaded towards its strength"
         saved = bonds.save(e)
-        before = (self.res, self.p_ref, self.u_ref)
+        before = (self.res, self.p_ref, self.u_ref, self.xh, self.p_held, self.u_held)
         try:
-            removed = bonds.advance(e, lam * float(elongation[e]))
+            removed = bonds.advance(e, crit.elongation, brittle=crit.mode != 0)
             self.solver.touch(self.bond_tris[e])
             if self.opts.max_rank == 0:
                 self.solver.rebase(*self.sp.factors(bonds.d))
@@ -381,30 +464,32 @@ class _Analysis:
         except KeyboardInterrupt:  # the event did not happen: undo the bond's change
             bonds.restore(e, saved)
             raise
-        res, p_ref, u_ref = before
+        res, p_ref, u_ref, xh, p_held, u_held = before
         delta = lam * u_ref
-        # energy released at fixed control displacement: 1/2 delta (P - P')
+        # energy released at fixed control displacement: 1/2 delta (P - P') (of the
+        # growing part)
         after = delta * self.p_ref / self.u_ref if self.u_ref else 0.0
         ev = Event(
             index=k,
             load_factor=lam,
             bond=e,
-            control_displacement=delta,
-            load=lam * p_ref,
+            control_displacement=u_held + delta,
+            load=p_held + lam * p_ref,
             tooth=int(saved[1]),
             broken=removed,
             residual=res,
             released=0.5 * delta * (lam * p_ref - after),
-            elongation=lam * float(elongation[e]),
+            elongation=crit.elongation,
             spring_lost=float(saved[0][e] - bonds.d[e]),
+            mode=MODES[crit.mode],
         )
         self.events.append(ev)
-        self.x_last = lam * x
+        self.x_last = lam * x if xh is None else xh + lam * x
         if removed:
             self.broken.append(e)
         self.snaps.add(Snapshot(k, self.x_last.reshape(-1, 2), saved[0]), ev.load > self.peak)
         self.peak = max(self.peak, ev.load)
-        return _stop(
+        stop = _stop(
             self.pieces,
             bonds.d,
             removed,
@@ -417,6 +502,9 @@ class _Analysis:
             k,
             self.p_ref / self.u_ref / self.k_initial,
         )
+        if stop is not None and self.fh is not None and lam == 0.0 and stop[0] == "separated":
+            stop = (stop[0], "under the held loads alone (load factor 0): " + stop[1])
+        return stop
 
     def result(self, reason, message, timings, loop: float) -> FractureResult:
         mesh, events = self.model.mesh, self.events

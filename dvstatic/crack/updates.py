@@ -74,7 +74,7 @@ class UpdatedSolver:
             self._z = np.empty((len(self.free), 48))
             self._w = np.empty((48, 48))
         self._u_cols = None
-        self._y0 = None  # A0^-1 b for the unchanged right-hand side
+        self._y0: dict[str, tuple] = {}  # A0^-1 b for each unchanged right-hand side
         self.factorisations += 1
         self.factor_seconds += time.perf_counter() - t0
 
@@ -148,8 +148,13 @@ class UpdatedSolver:
         fe = np.einsum("tkj,tk->tj", sp_.b[t], fq)
         return np.bincount(sp_.dofs[t].ravel(), fe.ravel(), len(x))
 
-    def rhs(self, w, g) -> np.ndarray:
-        """Right-hand side of the current matrix: forces minus the prescribed motion."""
+    def rhs(self, w, g, f=None) -> np.ndarray:
+        """Right-hand side of the current matrix: forces minus the prescribed motion; or,
+        with ``f``, the forces ``f`` with the constrained dofs held at zero."""
+        if f is not None:
+            b = np.array(f, dtype=float)
+            b[self.dofs] = 0.0
+            return b
         b = self.f - self.K0 @ self.uc
         if self.rank and np.any(self.values):
             b -= self.delta_full(self.uc, w, g)
@@ -168,8 +173,10 @@ class UpdatedSolver:
         small = np.eye(self.rank) + cb @ self.W
         return y - self.Z @ np.linalg.solve(small, cb @ uy)
 
-    def solve(self, w, g, tol: float = 1e-10):
-        """Displacement (2N,) per unit load factor and its relative residual.
+    def solve(self, w, g, tol: float = 1e-10, f=None):
+        """Displacement (2N,) per unit load factor and its relative residual; with ``f``
+        (2N,), the displacement under the forces ``f`` alone, the constrained dofs at 0
+        (a held load).
 
         The update is refined up to three times; if it still misses ``tol`` (an update
         that leaves the matrix nearly singular, e.g. a node hanging on collinear bonds,
@@ -178,19 +185,21 @@ class UpdatedSolver:
         """
         if self.rank > self.max_rank:
             self.rebase(w, g)
-        x, res = self._refined(w, g, tol)
+        x, res = self._refined(w, g, tol, f)
         if res > tol and self.rank:
             log.debug("update missed the tolerance (%.2e): refactorising", res)
             self.rebase(w, g)
-            x, res = self._refined(w, g, tol)
+            x, res = self._refined(w, g, tol, f)
         return x, res
 
-    def _refined(self, w, g, tol: float):
-        b = self.rhs(w, g)
+    def _refined(self, w, g, tol: float, f=None):
+        b = self.rhs(w, g, f)
         nb = float(np.linalg.norm(b)) or 1.0
-        if self._y0 is None or not np.array_equal(b, self._y0[0]):
-            self._y0 = (b, self.engine.apply(b))
-        x = self._woodbury(b, w, g, self._y0[1])
+        key = "grow" if f is None else "held"
+        cached = self._y0.get(key)
+        if cached is None or not np.array_equal(b, cached[0]):
+            self._y0[key] = cached = (b, self.engine.apply(b))
+        x = self._woodbury(b, w, g, cached[1])
         res = np.inf
         for _ in range(4):
             r = b - self.apply_matrix(x, w, g)

@@ -169,10 +169,14 @@ class Scene:
             out.append(Fix(self._nodes(mesh, s, f"supports[{i}]"), x=x, y=y))
         return out
 
-    def build_loads(self, mesh) -> list:
+    def build_loads(self, mesh, held: bool = False) -> list:
+        """The ``[[loads]]`` (``held``: the ``[[fracture.held]]`` loads) on ``mesh``."""
         out = []
-        for i, ld in enumerate(self.data["loads"]):
-            key = f"loads[{i}]"
+        items, where = self.data["loads"], "loads"
+        if held:
+            items, where = (self.data["fracture"] or {}).get("held", []), "fracture.held"
+        for i, ld in enumerate(items):
+            key = f"{where}[{i}]"
             if ld["type"] == "body":
                 region = ld["region"]
                 if region is not None and region not in mesh.regions:
@@ -262,7 +266,14 @@ class Scene:
             options = FractureOptions(**{key: fr[key] for key in FRACTURE_KEYS})
         except InputError as exc:  # the types are the schema's: only values are left
             raise self._err(f"fracture.{exc.param}", exc) from None
-        return dict(ft=ft, gf=gf, weibull=weibull, options=options)
+        return dict(
+            ft=ft,
+            gf=gf,
+            cohesion=fr["cohesion"],
+            friction_angle=fr["friction_angle"],
+            weibull=weibull,
+            options=options,
+        )
 
     def solve_options(self) -> dict:
         """Keyword options of :func:`dvstatic.solve` from ``[solver]``."""

@@ -259,6 +259,8 @@ def _check_rules(path, d: dict) -> None:
         raise SceneError(path, "output.scale", f"must be > 0, got {o['scale']}")
     if d["fracture"] is not None:
         _check_fracture_outputs(path, d)
+        for i, ld in enumerate(d["fracture"]["held"]):
+            _check_load(path, f"fracture.held[{i}]", ld)
 
 
 def _check_fracture_outputs(path, d: dict) -> None:

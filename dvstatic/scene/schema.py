@@ -265,6 +265,10 @@ SCHEMA: dict[str, F] = {
         default=None,
         schema={
             "ft": F("number", "tensile strength (stress units)", required=True),
+            "cohesion": F("number", "criterion mohr-coulomb: the cohesion c (stress units, > 0)"),
+            "friction_angle": F(
+                "number", "criterion mohr-coulomb: the friction angle phi (degrees, [0, 70))"
+            ),
             "gf": F(
                 "number",
                 "fracture energy (energy per crack area): saw-tooth softening of cracked bonds; "
@@ -417,6 +421,13 @@ def _fracture_schema() -> dict[str, F]:
     """The ``[fracture]`` table: the strengths and checks, and the options derived from
     :class:`~dvstatic.crack.FractureOptions`."""
     out = dict(SCHEMA["fracture"].schema)
+    out["held"] = F(
+        "tables",
+        "loads held at full value in every state (self-weight, in-situ stress, confinement), "
+        "the same tables as [[loads]]; only [[loads]] and the prescribed displacements grow",
+        default=[],
+        schema=SCHEMA["loads"].schema,
+    )
     for f in dataclasses.fields(FractureOptions):
         meta = f.metadata
         if meta["scene"]:

@@ -1,9 +1,12 @@
 """The breaking-criterion protocol and its registry.
 
-A criterion says, per unit load factor, what every intact bond compares with its
-threshold, how its thresholds follow from the material's strengths, and what a cracked
-bond softens by. The event loop (:mod:`dvstatic.crack.sla`) only calls
-:meth:`Criterion.prepare` once and :meth:`Criterion.critical` at every event. A new
+A criterion says what every intact bond compares with its threshold, how its thresholds
+follow from the material's strengths, and what a cracked bond softens by. A state is
+``x_held + lambda x_grow``; the event loop (:mod:`dvstatic.crack.sla`) only calls
+:meth:`Criterion.prepare` once and :meth:`Criterion.critical` at every event, which
+finds the bond that fails at the smallest load factor ``lambda >= 0``. A criterion
+linear in the state (``stress``, ``tension``) only defines :meth:`Criterion.__call__`;
+one that is not (``mohr-coulomb``) overrides :meth:`Criterion.factors`. A new
 criterion is a module in this package with a :func:`register`-ed subclass (and a test);
 its name is then accepted by ``dv.fracture(criterion=...)`` and the scene.
 """
@@ -12,14 +15,19 @@ from __future__ import annotations
 
 import time
 from abc import ABC, abstractmethod
-from typing import ClassVar
+from typing import ClassVar, NamedTuple
 
 import numpy as np
 
 from ..strength import bond_strength, principal_response, weibull_factors
 from .responses import per_bond, responses
 
-__all__ = ["Criterion", "REGISTRY", "register", "criterion_for"]
+__all__ = ["Criterion", "Critical", "REGISTRY", "register", "criterion_for", "MODES"]
+
+#: failure modes of a bond, by the code :meth:`Criterion.factors` gives: tension (the
+#: normal stress across the face), shear (the Coulomb line, the face not in compression)
+#: and crushing (the Coulomb line, the face in compression)
+MODES = ("tension", "shear", "crushing")
 
 #: criterion name -> class, in the order they were registered
 REGISTRY: dict[str, type[Criterion]] = {}
@@ -36,6 +44,31 @@ def criterion_for(name: str, model, sp_) -> Criterion:
     return REGISTRY[name](model, sp_)
 
 
+class Critical(NamedTuple):
+    """The next event: which bond, at which load factor, how, and its elongation there."""
+
+    bond: int
+    factor: float  #: the load factor (inf: no bond is loaded towards its threshold)
+    mode: int  #: index into :data:`MODES`
+    elongation: float  #: the bond's elongation in the critical state (length)
+
+
+def linear_factors(vh, vg, threshold):
+    """``(ratio, excess)`` of a criterion linear in the state: ``vh + lambda vg`` reaches
+    ``threshold`` at ``lambda = 1 / ratio`` (ratio 0: never); ``excess`` >= 1 where the
+    held part alone reaches it (``vh / threshold``), else 0. Without a held part the
+    ratio is ``vg / threshold`` exactly."""
+    room = threshold - vh
+    ok = room > 0
+    ratio = np.zeros(len(vg))
+    np.divide(vg, room, out=ratio, where=ok)
+    ratio[~(ratio > 0)] = 0.0
+    excess = np.zeros(len(vg))
+    np.divide(vh, threshold, out=excess, where=~ok & (threshold > 0))
+    excess[excess < 1.0] = 0.0
+    return ratio, excess
+
+
 class Criterion(ABC):
     """Base of the breaking criteria (abstract: a criterion defines :meth:`thresholds`
     and :meth:`__call__`).
@@ -49,6 +82,8 @@ class Criterion(ABC):
 
     #: the name ``dv.fracture(criterion=...)`` takes
     name: ClassVar[str] = ""
+    #: the strength keywords of ``dv.fracture`` beyond ``ft`` (and ``gf``) it needs
+    parameters: ClassVar[tuple[str, ...]] = ()
 
     def __init__(self, model, sp_):
         self.sp = sp_
@@ -76,12 +111,30 @@ class Criterion(ABC):
         """What every intact bond compares with its threshold, shape (n_bonds,), in the
         state ``x`` (per unit load factor) of the damaged stiffness ``w, g``."""
 
+    def set_parameters(self, model, ftb, factors, **params) -> None:
+        """Take the criterion's own strengths (:attr:`parameters`, checked by the
+        criterion) per bond; ``ftb`` the tensile strength per bond, ``factors`` the
+        random field (None: uniform). The base criterion takes none."""
+        return None
+
+    def factors(self, xh, xg, w, g, intact, threshold):
+        """``(ratio, excess, mode)`` of every bond as if it were intact (n_bonds,) each:
+        it reaches its threshold under ``xh + lambda xg`` at ``lambda = 1 / ratio``
+        (ratio 0: never), the held part ``xh`` (None: none) alone overloads it by
+        ``excess`` >= 1 (else 0), failing in ``mode`` (index into :data:`MODES`). This
+        default serves criteria linear in the state, in tension."""
+        vg = self(xg, w, g, intact)
+        vh = 0.0 if xh is None else self(xh, w, g, intact)
+        ratio, excess = linear_factors(vh, vg, threshold)
+        return ratio, excess, np.zeros(len(vg), dtype=np.int64)
+
     # ------------------------------------------------------------------ shared
-    def prepare(self, model, ft, weibull, timings: dict, dofs=None):
+    def prepare(self, model, ft, weibull, timings: dict, dofs=None, params=None):
         """Thresholds (n_bonds,) in the criterion's units and the tension-based
         strengths (n_bonds,; force, for the fracture energies), from ``ft`` (a number
-        or ``{region: ft}``) and the random field; ``dofs``: the problem's prescribed
-        dofs (the uniform-stress responses hold them)."""
+        or ``{region: ft}``), the criterion's own ``params`` (:attr:`parameters`) and the
+        random field; ``dofs``: the problem's prescribed dofs (the uniform-stress
+        responses hold them)."""
         t0 = time.perf_counter()
         mesh = model.mesh
         tens, patches = responses(model, self.length, self.area, dofs)
@@ -92,6 +145,8 @@ class Criterion(ABC):
         ftb = per_bond(model, ft, "ft")
         s_t = bond_strength(principal_response(tens), ftb, factors)
         s = self.thresholds(s_t, ftb, factors)
+        self.s_tension = s_t
+        self.set_parameters(model, ftb, factors, **(params or {}))
         timings["strength"] = time.perf_counter() - t0
         return s, s_t
 
@@ -101,14 +156,27 @@ class Criterion(ABC):
         u = x.reshape(-1, 2)
         return np.einsum("ei,ei->e", self.n, u[self.bonds[:, 1]] - u[self.bonds[:, 0]])
 
-    def critical(self, x, w, g, intact, d: np.ndarray, threshold: np.ndarray):
-        """The bond closest to its threshold, the load factor that brings it there, and
-        every bond's softening variable: ``(bond, load factor, softening)``. Intact bonds
-        (``d >= 1``) answer by the criterion, cracked ones by their softening variable;
-        the load factor is ``inf`` when no bond is loaded towards its threshold."""
-        softening = self.softening(x)
-        value = np.where(d >= 1.0, self(x, w, g, intact), softening)
-        ratio = np.where(d > 0, value / threshold, 0.0)
-        ratio[~(ratio > 0)] = 0.0
-        e = int(np.argmax(ratio))
-        return e, (1.0 / ratio[e] if ratio[e] > 0 else np.inf), softening
+    def critical(self, xh, xg, w, g, intact, d: np.ndarray, threshold: np.ndarray) -> Critical:
+        """The bond that reaches its threshold at the smallest load factor under
+        ``xh + lambda xg`` (``xh`` the held part, None without one). Intact bonds
+        (``d >= 1``) answer by the criterion, cracked ones by their elongation against
+        the tooth's threshold; bonds the held part alone overloads come first, at
+        ``lambda = 0``, the most overloaded one first."""
+        sg = self.softening(xg)
+        sh = 0.0 if xh is None else self.softening(xh)
+        ratio, excess, mode = self.factors(xh, xg, w, g, intact, threshold)
+        s_ratio, s_excess = linear_factors(sh, sg, threshold)
+        cracked = d < 1.0
+        ratio = np.where(cracked, s_ratio, ratio)
+        excess = np.where(cracked, s_excess, excess)
+        mode = np.where(cracked, 0, mode)
+        gone = d <= 0
+        ratio[gone] = excess[gone] = 0.0
+        if np.any(excess >= 1.0):
+            e = int(np.argmax(excess))
+            lam = 0.0
+        else:
+            e = int(np.argmax(ratio))
+            lam = 1.0 / ratio[e] if ratio[e] > 0 else np.inf
+        el = float(sg[e]) * (lam if np.isfinite(lam) else 0.0) + (0.0 if xh is None else sh[e])
+        return Critical(e, lam, int(mode[e]), el)

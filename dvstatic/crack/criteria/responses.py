@@ -25,16 +25,18 @@ def positive(value, name: str) -> None:
         raise InputError(f"{name} must be a finite number > 0, got {value!r}", name)
 
 
-def per_bond(model: VoronoiModel, value, name: str) -> np.ndarray:
+def per_bond(model: VoronoiModel, value, name: str, check=None) -> np.ndarray:
     """A material property per bond: a number, or {region: number} over a default
-    (``None`` key or ``"default"``); a bond between regions takes the smaller value."""
+    (``None`` key or ``"default"``); a bond between regions takes the smaller value.
+    ``check(value, name)`` refuses a bad number (default: :func:`positive`)."""
+    check = check or positive
     mesh = model.mesh
     if isinstance(value, Mapping):
         values = dict(value)
         default = values.pop(None, values.pop("default", None))
         if default is None:
             raise InputError(f"{name} as a mapping needs a 'default' value", name)
-        positive(default, name)
+        check(default, name)
         tri = np.full(mesh.n_triangles, float(default))
         for region, v in values.items():
             if region not in mesh.regions:
@@ -43,10 +45,10 @@ def per_bond(model: VoronoiModel, value, name: str) -> np.ndarray:
                     name,
                     region,
                 )
-            positive(v, f"{name}[{region!r}]")
+            check(v, f"{name}[{region!r}]")
             tri[mesh.regions[region]] = float(v)
     else:
-        positive(value, name)
+        check(value, name)
         tri = np.full(mesh.n_triangles, float(value))
     out = np.full(mesh.n_bonds, np.inf)
     np.minimum.at(out, mesh.topology.tri_bonds.ravel(), np.repeat(tri, 3))
@@ -78,16 +80,39 @@ def _uniform_response(model, length, area, dofs=None):
     else:
         E, nu = model.material.in_plane
         affine = [(x @ strain.T).reshape(-1)[dofs] for strain in _unit_strains(E, nu)]
-    system = ConstrainedSystem(sp_.stiffness(mesh, w, g), dofs)
+    K = sp_.stiffness(mesh, w, g)
+    system = ConstrainedSystem(K, dofs)
     engine = DirectSolver(system.A, order=mesh_dof_order(mesh))
     loads = uniform_stress_loads(mesh, model.t)
     us = [engine.apply(system.rhs(f, v)) for f, v in zip(loads, affine, strict=True)]
+    if np.any([np.any(v) for v in affine]):
+        us = _unit_mean_stress(mesh, K, us, model.t)
     forces = [sp_.forces(u, w, g) for u in us]
     tens = [sp_.tension(u, w, g, f) for u, f in zip(us, forces, strict=True)]
     patches = [
         sp_.patch_stress(u, w, g, length, area, None, f) for u, f in zip(us, forces, strict=True)
     ]
     return tens, patches
+
+
+def _unit_mean_stress(mesh, K, us, thickness):
+    """The three states recombined so that their mean stresses are exactly the unit
+    stresses xx, yy, xy. A state with prescribed displacements has the stress the
+    lattice's stiffness gives the prescribed strain, which differs from E times it by
+    the lattice's modulus error on this mesh; the mean stress over the body is what
+    equilibrium says, ``sum_i x_i (x) F_i / (A t)`` with ``F = K u`` (loads and
+    reactions), so the states are scaled to it (the load a bond fails at is then the
+    reactions' load, as measured)."""
+    x = mesh.points
+    area = float(mesh.triangle_areas.sum()) * thickness
+    cols = []
+    for u in us:
+        f = (K @ u).reshape(-1, 2)
+        s = np.einsum("ni,nj->ij", x, f) / area
+        s = 0.5 * (s + s.T)
+        cols.append([s[0, 0], s[1, 1], s[0, 1]])
+    m = np.linalg.inv(np.array(cols).T)  # state'_k = sum_j state_j m[j, k]
+    return [sum(m[j, k] * us[j] for j in range(3)) for k in range(3)]
 
 
 def _unit_strains(E: float, nu: float) -> list[np.ndarray]:

@@ -51,6 +51,14 @@ class Stress(Criterion):
         return np.where(self.use_tension, s_tension, scale)
 
     def __call__(self, x, w, g, intact=None) -> np.ndarray:
+        normal, _, covered, t = self.measure(x, w, g, intact)
+        return np.where(covered & ~self.use_tension, normal, t)
+
+    def measure(self, x, w, g, intact=None):
+        """``(normal, v, covered, t)`` of state ``x``: the normal measure (n_bonds,;
+        tension units, see the class), the unbiased patch stress ``v`` (n_bonds, 3; xx,
+        yy, xy; 0 where the patch is empty), whether the patch has a triangle (bool,
+        n_bonds) and the tensions."""
         f = self.sp.forces(x, w, g)
         t = self.sp.tension(x, w, g, f)
         s, covered = self.sp.patch_stress(x, w, g, self.length, self.area, intact, f)
@@ -59,12 +67,11 @@ class Stress(Criterion):
         normal = self.h_nn * (
             v[:, 0] * n[:, 0] ** 2 + v[:, 1] * n[:, 1] ** 2 + 2 * v[:, 2] * n[:, 0] * n[:, 1]
         )
-        if intact is None or intact.all():
-            return np.where(covered & ~self.use_tension, normal, t)
-        h = self.h
-        along = h[:, 0] * v[:, 0] + h[:, 1] * v[:, 1] + h[:, 2] * v[:, 2] - normal
-        m = np.where(self._near_damage(intact), t - along, normal)
-        return np.where(covered & ~self.use_tension, m, t)
+        if intact is not None and not intact.all():
+            h = self.h
+            along = h[:, 0] * v[:, 0] + h[:, 1] * v[:, 1] + h[:, 2] * v[:, 2] - normal
+            normal = np.where(self._near_damage(intact), t - along, normal)
+        return normal, np.where(covered[:, None], v, 0.0), covered, t
 
     def _near_damage(self, intact: np.ndarray) -> np.ndarray:
         """Bonds of a damaged triangle (the damaged bond's neighbours), (n_bonds,) bool."""
