@@ -602,7 +602,7 @@ def test_a_new_criterion_is_one_registered_class():
 
 
 def test_control_displacement_is_the_spread_and_a_translation_is_refused():
-    from dvstatic.crack.sla import _displacement_measure, _load_measure
+    from dvstatic.crack.control import _displacement_measure, _load_measure
 
     dofs = np.array([1, 3, 5, 7])
     assert _displacement_measure(dofs, np.array([1.0, 1.0, 2.0, 2.0])) == 1.0  # d and 2 d
