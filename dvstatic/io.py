@@ -263,7 +263,8 @@ def write_fracture_series(folder: str | Path, result, name: str = "fracture") ->
     One ``<name>_NNNN.vtu`` per snapshot (and the final state) in ``folder``, listed
     with their event numbers as times in ``<name>.pvd`` (open that one). Each holds the
     bonds as line cells with ``stiffness`` (1 intact, 0 broken), ``broken`` (0/1),
-    ``mode`` (how a broken bond failed: 0 intact, 1 tension, 2 shear, 3 crushing) and
+    ``mode`` (how a broken bond failed: 0 intact, 1 tension, 2 shear, 3 crushing),
+    ``closed`` (1: a cracked face closed, carrying compression) and
     ``strength`` (force), and the nodes with ``displacement`` (at the event's critical
     load), ``damage`` (mean stiffness loss of the node's bonds) and ``stress_virial``
     (N, 9: the damaged lattice's bond forces over each Voronoi cell; the recovered
@@ -288,13 +289,15 @@ def write_fracture_series(folder: str | Path, result, name: str = "fracture") ->
     for ev in result.events:
         if ev.broken:
             code[ev.bond] = 1 + MODES.index(ev.mode)
-    states = [(s.event, s.u, s.stiffness) for s in result.snapshots]
+    states = [(s.event, s.u, s.stiffness, s.closed) for s in result.snapshots]
     last = len(result.events)
-    states.append((last, result.u, result.stiffness))
+    states.append((last, result.u, result.stiffness, None))
     entries = []
-    for k, (event, u, d) in enumerate(states):
+    for k, (event, u, d, closed) in enumerate(states):
         virial = np.zeros((mesh.n_points, 9))
-        virial[:, [0, 1, 3, 4]] = node_stress(result.model.damaged(d), u).reshape(-1, 4)
+        damaged = result.model.damaged(d, closed)
+        virial[:, [0, 1, 3, 4]] = node_stress(damaged, u).reshape(-1, 4)
+        closed = np.zeros(mesh.n_bonds, bool) if closed is None else closed
         out = meshio.Mesh(
             pts,
             [("line", bonds)],
@@ -307,6 +310,7 @@ def write_fracture_series(folder: str | Path, result, name: str = "fracture") ->
                 "stiffness": [d],
                 "broken": [(d <= 0).astype(np.int8)],
                 "mode": [np.where(d <= 0, code, 0).astype(np.int8)],
+                "closed": [closed.astype(np.int8)],
                 "strength": [result.strength],
             },
         )

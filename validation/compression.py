@@ -72,7 +72,7 @@ def _held_equilibrium(model, res, held) -> float:
     worst = 0.0
     for snap in res.snapshots:
         lam = res.events[snap.event].load_factor
-        system = ConstrainedSystem(s.stiffness(mesh, *s.factors(snap.stiffness)), dofs)
+        system = ConstrainedSystem(s.stiffness(mesh, *s.factors(snap.stiffness, snap.closed)), dofs)
         b = system.rhs(fh, lam * values)
         r = system.A @ snap.u.ravel() - b
         worst = max(worst, float(np.linalg.norm(r) / np.linalg.norm(b)))

@@ -41,6 +41,13 @@ class FractureOptions:
         "string",
         CRITERIA,
     )
+    contact: bool = option(
+        True,
+        "cracks close: a face cracked in tension carries normal compression again once it "
+        "closes (unilateral contact, the status made consistent within each event); False: "
+        "cracked faces carry nothing",
+        "bool",
+    )
     teeth: int = option(
         30, "saw-tooth steps of a cracked bond's softening (with `gf`; 2 to 1000)", "int"
     )
@@ -103,6 +110,8 @@ class FractureOptions:
             check_int("snapshot_every", self.snapshot_every, minimum=1)
         _fraction("stop_load_ratio", self.stop_load_ratio, closed=False)
         _fraction("fragment", self.fragment, closed=True)
+        if not isinstance(self.contact, bool):
+            raise TypeError(f"contact must be True or False, got {self.contact!r}")
         if not isinstance(self.progress, bool):
             raise TypeError(f"progress must be True or False, got {self.progress!r}")
 

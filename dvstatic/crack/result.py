@@ -43,6 +43,9 @@ class Event:
     spring_lost : float
         The part of the bond's spring the event took: its stiffness factor before the
         event minus after it.
+    closed : tuple of int
+        The faces cracked in tension that are closed in the recorded state (in contact:
+        their bonds carry compression with their whole spring).
     mode : str
         How the bond's face failed: "tension", "shear" (Coulomb's line, the face not in
         compression) or "crushing" (Coulomb's line, the face in compression); cracked
@@ -66,16 +69,20 @@ class Event:
     elongation: float = float("nan")
     spring_lost: float = float("nan")
     mode: str = "tension"
+    closed: tuple = ()
 
 
 @dataclass(frozen=True)
 class Snapshot:
-    """The state at an event: displacement ``u`` (N, 2) at its critical load and the bond
-    stiffness factors ``stiffness`` (n_bonds,) (1 intact, 0 broken) before the event."""
+    """The state at an event: displacement ``u`` (N, 2) at its critical load, the bond
+    stiffness factors ``stiffness`` (n_bonds,) (1 intact, 0 broken) before the event and
+    the ``closed`` cracks (bool, n_bonds; in contact, with their whole spring; None:
+    none). ``model.damaged(stiffness, closed)`` is the lattice the state solves."""
 
     event: int
     u: np.ndarray
     stiffness: np.ndarray
+    closed: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -151,6 +158,10 @@ class FractureResult:
     supports: tuple = ()
     loads: tuple = ()
     held: tuple = ()
+    #: bond factors at the start (None: intact; a run started from another)
+    initial: np.ndarray | None = field(default=None, repr=False)
+    #: the bonds' damage state at the end (for ``dv.fracture(start=...)``)
+    bond_state: dict | None = field(default=None, repr=False, compare=False)
 
     def _event(self, k: int) -> int:
         n = len(self.events)
@@ -162,7 +173,7 @@ class FractureResult:
         """Bond stiffness factors (n_bonds,; 1 intact, 0 broken) at event ``k``, before
         its bond changes (the state whose critical load the event records)."""
         k = self._event(k)
-        d = np.ones(self.model.mesh.n_bonds)
+        d = np.ones(self.model.mesh.n_bonds) if self.initial is None else self.initial.copy()
         bonds = np.array([e.bond for e in self.events[:k]], dtype=np.int64)
         lost = np.array([e.spring_lost for e in self.events[:k]], dtype=float)
         np.subtract.at(d, bonds, lost)
@@ -178,7 +189,9 @@ class FractureResult:
 
         k = self._event(k)
         lam = self.events[k].load_factor
-        model = self.model.damaged(self.stiffness_at(k))
+        closed = np.zeros(self.model.mesh.n_bonds, dtype=bool)
+        closed[list(self.events[k].closed)] = True  # cracks in contact: their spring back
+        model = self.model.damaged(self.stiffness_at(k), closed)
         loads = scaled(list(self.loads), lam) + list(self.held)
         return solve(model, scaled(list(self.supports), lam), loads)
 
@@ -234,7 +247,14 @@ class FractureResult:
             "modes": {m: sum(e.mode == m for e in self.events) for m in MODES},
             "peak": None if peak is None else asdict(peak),
             "dissipated": self.dissipated,
-            "events": [asdict(e) for e in self.events],
+            "events": [_event_dict(e) for e in self.events],
             "seconds": asdict(self.seconds),
             "stats": asdict(self.stats),
         }
+
+
+def _event_dict(e: Event) -> dict:
+    """An event for JSON: the closed faces as their number."""
+    d = asdict(e)
+    d["closed"] = len(e.closed)
+    return d

@@ -26,6 +26,7 @@ from ..lattice.damage import split as _split
 from ..mesh import Mesh
 from ..problem import Problem
 from ..solvers.options import options_docstring
+from .contact import MAX_ITERATIONS, Contact
 from .control import criterion_parameters, held_problem, reference
 from .criteria import MODES, criterion_for, per_bond
 from .options import FractureOptions
@@ -48,13 +49,13 @@ BUFFON = np.pi / 4
 MECHANISM = 1e-6
 
 
-def _state(solver, sp_, d, control, ref, f, fh=None):
+def _state(solver, w, g, control, ref, f, fh=None):
     """Solve the damaged lattice per unit load factor (``fh`` None) or for the held
     forces ``fh`` (the supports at rest): displacement, relative residual, and its part
     of the conjugate (load, displacement): the load factor's coefficients, or the held
     part's constant terms (force control: no load, the displacement along ``f``;
-    displacement control: the reactions' work on the control, no displacement)."""
-    w, g = sp_.factors(d)
+    displacement control: the reactions' work on the control, no displacement); ``w,
+    g`` the damaged stiffness's factors."""
     x, res = solver.solve(w, g, EQUILIBRIUM_TOL, fh)
     if control == "force":
         return x, res, (0.0 if fh is not None else ref), float(f @ x) / ref
@@ -63,6 +64,19 @@ def _state(solver, sp_, d, control, ref, f, fh=None):
         kx = kx + solver.delta_full(x, w, g)
     reaction = (kx - (f if fh is None else fh))[solver.dofs]
     return x, res, float(reaction @ solver.values) / ref, (0.0 if fh is not None else ref)
+
+
+def _check_start(model, start) -> None:
+    if start is None:
+        return
+    if not isinstance(start, FractureResult) or start.bond_state is None:
+        raise TypeError(f"start must be the FractureResult of a run, got {type(start).__name__}")
+    mesh = start.model.mesh
+    same = mesh is model.mesh or (
+        mesh.n_bonds == model.mesh.n_bonds and np.array_equal(mesh.points, model.mesh.points)
+    )
+    if not same:
+        raise InputError("start: the run was made on another mesh than the model's", "start")
 
 
 def _check_options(model, weibull) -> None:
@@ -85,11 +99,13 @@ def fracture(
     cohesion=None,
     friction_angle=None,
     weibull: Weibull | None = None,
+    start: FractureResult | None = None,
     options: FractureOptions | None = None,
     **kwargs,
 ) -> FractureResult:
     opts = FractureOptions.from_kwargs(options, **kwargs)
     _check_options(model, weibull)
+    _check_start(model, start)
     params = criterion_parameters(opts.criterion, cohesion=cohesion, friction_angle=friction_angle)
     timings: dict[str, float] = {}
     t_start = time.perf_counter()
@@ -112,6 +128,7 @@ def fracture(
         timings,
         t_start,
         opts,
+        start,
     )
     return dataclasses.replace(
         res,
@@ -133,6 +150,7 @@ def _signature() -> inspect.Signature:
         inspect.Parameter("cohesion", kw, default=None),
         inspect.Parameter("friction_angle", kw, default=None),
         inspect.Parameter("weibull", kw, default=None),
+        inspect.Parameter("start", kw, default=None),
         inspect.Parameter("options", kw, default=None),
     ]
     defaults = FractureOptions()
@@ -171,6 +189,11 @@ fracture.__doc__ = f"""Quasi-static fracture by bond breaking, event by event (s
         ``2 c cos(phi) / (1 - sin(phi))`` (:func:`dvstatic.crack.ucs`).
     weibull : Weibull, optional
         Random strength field.
+    start : FractureResult, optional
+        Go on from the end of this earlier run on the same mesh (its cracked and broken
+        bonds, their teeth, the faces cracked in tension that can close) under new
+        supports and loads: e.g. crack in tension, then compress. Intact bonds take
+        the strengths of the new problem.
     options : FractureOptions, optional
         All options at once; keywords given as well override it.
 {options_docstring(cls=FractureOptions)}
@@ -240,6 +263,25 @@ class _Bonds:
         self.threshold = np.asarray(strength, float).copy()
         self.spring, self.energy, self.teeth = spring, energy, teeth
         self.steps: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+
+    def state(self, cracked) -> dict:
+        """Everything :meth:`load` needs to go on from here (copies)."""
+        steps = {e: (a.copy(), b.copy()) for e, (a, b) in self.steps.items()}
+        return dict(
+            d=self.d.copy(),
+            tooth=self.tooth.copy(),
+            threshold=self.threshold.copy(),
+            steps=steps,
+            cracked=cracked.copy(),
+        )
+
+    def load(self, state: dict) -> None:
+        """Take the damage of an earlier run; intact bonds keep this run's thresholds."""
+        self.d[:] = state["d"]
+        self.tooth[:] = state["tooth"]
+        hit = self.d < 1.0
+        self.threshold[hit] = state["threshold"][hit]
+        self.steps = {e: (a.copy(), b.copy()) for e, (a, b) in state["steps"].items()}
 
     def save(self, e: int):
         """All stiffness factors and bond ``e``'s tooth state, for :meth:`restore`."""
@@ -318,19 +360,37 @@ class _Analysis:
         loaded = self.f if self.fh is None else np.abs(self.f) + np.abs(self.fh)
         self.pieces = Pieces(model, self.dofs, self.values, loaded, opts.fragment)
         self.bond_tris = bond_triangles(model.mesh)
+        self.contact = Contact(model.mesh.n_bonds, opts.contact)
+        self.initial = None
         self.snaps = _Kept(opts.snapshots, opts.snapshot_every)
         self.events: list[Event] = []
         self.broken: list[int] = []
         self.peak = 0.0
 
+    def resume(self, state: dict) -> None:
+        """Start from the damage of an earlier run (before :meth:`start`)."""
+        self.bonds.load(state)
+        self.contact.cracked[:] = state["cracked"]
+        self.initial = self.bonds.d.copy()
+
+    @property
+    def solved(self) -> np.ndarray:
+        """The bond factors as the pieces see them (closed faces hold: 1)."""
+        return self.contact.effective(self.bonds.d)
+
+    def factors(self):
+        """The damaged stiffness's factors ``(w, g)``, closed cracks with their spring."""
+        closed = self.contact.closed
+        return self.sp.factors(self.bonds.d, closed if closed.any() else None)
+
     def start(self) -> None:
-        self.solver.rebase(*self.sp.factors(self.bonds.d))
+        self.solver.rebase(*self.factors())
         self._solve()
         self.x_last = self.x
         self.k_initial = self.p_ref / self.u_ref
 
     def _solve(self) -> None:
-        args = (self.solver, self.sp, self.bonds.d, self.control, self.ref, self.f)
+        args = (self.solver, *self.factors(), self.control, self.ref, self.f)
         self.x, self.res, self.p_ref, self.u_ref = _state(*args)
         self.xh, self.p_held, self.u_held = None, 0.0, 0.0
         if self.fh is not None:
@@ -340,23 +400,26 @@ class _Analysis:
     def step(self, k: int):
         """Event ``k``; returns (reason, message) if the analysis stops, else None. Ctrl-C
         during the event undoes its bond change (the result stays consistent)."""
-        bonds, x = self.bonds, self.x
-        w, g = self.sp.factors(bonds.d)
-        intact = np.all(bonds.d[self.sp.tri_bonds] >= 1.0, axis=1).astype(float)
-        crit = self.criterion.critical(self.xh, x, w, g, intact, bonds.d, bonds.threshold)
+        bonds = self.bonds
+        crit = self._critical()
+        x = self.x
         e, lam = crit.bond, crit.factor
         if not np.isfinite(lam):
             return "no_tension", "no unbroken bond is loaded towards its strength"
         saved = bonds.save(e)
+        cracked, closed = bool(self.contact.cracked[e]), self.contact.closed.copy()
         before = (self.res, self.p_ref, self.u_ref, self.xh, self.p_held, self.u_held)
         try:
             removed = bonds.advance(e, crit.elongation, brittle=crit.mode != 0)
+            if crit.mode == 0:
+                self.contact.cracked[e] = True
             self.solver.touch(self.bond_tris[e])
             if self.opts.max_rank == 0:
-                self.solver.rebase(*self.sp.factors(bonds.d))
+                self.solver.rebase(*self.factors())
             self._solve()
         except KeyboardInterrupt:  # the event did not happen: undo the bond's change
             bonds.restore(e, saved)
+            self.contact.cracked[e] = cracked
             raise
         res, p_ref, u_ref, xh, p_held, u_held = before
         delta = lam * u_ref
@@ -376,16 +439,18 @@ class _Analysis:
             elongation=crit.elongation,
             spring_lost=float(saved[0][e] - bonds.d[e]),
             mode=MODES[crit.mode],
+            closed=tuple(int(b) for b in np.flatnonzero(closed)),
         )
         self.events.append(ev)
         self.x_last = lam * x if xh is None else xh + lam * x
         if removed:
             self.broken.append(e)
-        self.snaps.add(Snapshot(k, self.x_last.reshape(-1, 2), saved[0]), ev.load > self.peak)
+        snap = Snapshot(k, self.x_last.reshape(-1, 2), saved[0], closed if closed.any() else None)
+        self.snaps.add(snap, ev.load > self.peak)
         self.peak = max(self.peak, ev.load)
         stop = _stop(
             self.pieces,
-            bonds.d,
+            self.solved,
             removed,
             self.model.mesh.topology.bonds[e],
             self.model,
@@ -400,14 +465,42 @@ class _Analysis:
             stop = (stop[0], "under the held loads alone (load factor 0): " + stop[1])
         return stop
 
+    def _critical(self):
+        """The next event's critical bond with the contact status consistent: solve,
+        find the critical load factor, set every cracked face's status from that state,
+        and again until no status changes (at most :data:`MAX_ITERATIONS` passes)."""
+        bonds = self.bonds
+        for _ in range(MAX_ITERATIONS):
+            w, g = self.factors()
+            intact = np.all(bonds.d[self.sp.tri_bonds] >= 1.0, axis=1).astype(float)
+            crit = self.criterion.critical(self.xh, self.x, w, g, intact, bonds.d, bonds.threshold)
+            if not self.contact.active or not np.isfinite(crit.factor):
+                return crit
+            state = crit.factor * self.x if self.xh is None else self.xh + crit.factor * self.x
+            changed = self.contact.update(self.criterion.softening(state))
+            if not len(changed):
+                return crit
+            self.solver.touch(np.unique(self.bond_tris[changed]))
+            if self.opts.max_rank == 0:
+                self.solver.rebase(*self.factors())
+            self._solve()
+        log.warning(
+            "fracture: the contact status of the closed cracks did not settle in %d passes; "
+            "keeping the last one",
+            MAX_ITERATIONS,
+        )
+        return crit
+
     def result(self, reason, message, timings, loop: float) -> FractureResult:
         mesh, events = self.model.mesh, self.events
         return FractureResult(
             model=self.model,
             events=tuple(events),
             u=self.x_last.reshape(-1, 2) if events else np.zeros((mesh.n_points, 2)),
-            stiffness=self.bonds.d,
+            stiffness=self.bonds.d.copy(),
             broken=np.array(self.broken, dtype=np.int64),
+            initial=self.initial,
+            bond_state=self.bonds.state(self.contact.cracked),
             snapshots=self.snaps.states(),
             stop_reason=reason,
             message=message,
@@ -423,9 +516,13 @@ class _Analysis:
         )
 
 
-def _run(model, sp_, criterion, s0, energy, problem, timings, t_start, opts) -> FractureResult:
+def _run(
+    model, sp_, criterion, s0, energy, problem, timings, t_start, opts, start=None
+) -> FractureResult:
     """The event loop (see :func:`fracture`); Ctrl-C keeps the events so far."""
     run = _Analysis(model, sp_, criterion, s0, energy, problem, opts)
+    if start is not None:
+        run.resume(start.bond_state)
     n = opts.max_events
     reason, message = "max_events", f"stopped after max_events = {n} events"
     t0 = time.perf_counter()

@@ -71,11 +71,14 @@ class TriangleSplit:
     def n_bonds(self) -> int:
         return int(self.tri_bonds.max()) + 1
 
-    def factors(self, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def factors(self, d: np.ndarray, closed=None) -> tuple[np.ndarray, np.ndarray]:
         """Spring shares ``w`` (M, 3) and couplings ``g`` (M,) for bond stiffness factors
-        ``d`` (n_bonds,) in [0, 1] (broken bonds keep ``RESIDUAL``)."""
-        dt = np.maximum(d, RESIDUAL)[self.tri_bonds]
-        return self.w * dt, self.g * np.min(d[self.tri_bonds], axis=1)
+        ``d`` (n_bonds,) in [0, 1] (broken bonds keep ``RESIDUAL``); ``closed`` (bool,
+        n_bonds): cracks in contact, with their whole spring (the coupling stays off)."""
+        ds = np.maximum(d, RESIDUAL)
+        if closed is not None:
+            ds = np.where(closed, 1.0, ds)
+        return self.w * ds[self.tri_bonds], self.g * np.min(d[self.tri_bonds], axis=1)
 
     def q(self, w: np.ndarray, g: np.ndarray, sl=slice(None)) -> np.ndarray:
         """The 3x3 bond matrices ``Q_T = diag(w_T) + g_T M_T`` of triangles ``sl``."""

@@ -96,6 +96,9 @@ class VoronoiModel:
         Bond stiffness factors in [0, 1] (1 intact, 0 broken) of a cracked lattice, as
         :func:`dvstatic.fracture` leaves it (use :meth:`damaged`): each spring times its
         factor, each triangle's coupling times the smallest factor of its bonds.
+    closed : ndarray of bool, shape (n_bonds,), optional
+        With ``damage``: cracked bonds whose faces are closed (in contact), which carry
+        compression with their whole spring (their triangles' coupling stays off).
 
     Raises
     ------
@@ -115,6 +118,7 @@ class VoronoiModel:
     thickness: float | None = None
     materials: object = None
     damage: np.ndarray | None = None
+    closed: np.ndarray | None = None
     kind: ClassVar[str] = ""
     barycentric_images: ClassVar[bool] = True
 
@@ -161,6 +165,8 @@ class VoronoiModel:
 
     def _check_damage(self) -> None:
         if self.damage is None:
+            if self.closed is not None:
+                raise InputError("closed applies to a damaged lattice: give damage", "closed")
             return
         d = np.array(self.damage, dtype=float)  # a copy: the model owns it
         if d.shape != (self.mesh.n_bonds,):
@@ -173,17 +179,27 @@ class VoronoiModel:
             raise InputError("damage factors must lie in [0, 1] (1 intact, 0 broken)", "damage")
         d.setflags(write=False)
         object.__setattr__(self, "damage", d)
+        if self.closed is not None:
+            c = np.array(self.closed, dtype=bool)
+            if c.shape != d.shape:
+                raise InputError(f"closed must have one flag per bond, got {c.shape}", "closed")
+            c.setflags(write=False)
+            object.__setattr__(self, "closed", c if c.any() else None)
 
-    def damaged(self, stiffness: np.ndarray) -> VoronoiModel:
+    def damaged(self, stiffness: np.ndarray, closed=None) -> VoronoiModel:
         """This lattice with bond stiffness factors ``stiffness`` (n_bonds,; 1 intact, 0
         broken), as :func:`dvstatic.fracture` leaves it: the same calibration, each
         bond's spring times its factor (a broken bond keeps
         :data:`~dvstatic.lattice.damage.RESIDUAL` of it), and a triangle's coupling
-        times the smallest factor of its bonds (:mod:`dvstatic.lattice.damage`). A model
-        like any other: ``dv.solve``, ``Solution.stress()`` and the writers take it."""
+        times the smallest factor of its bonds (:mod:`dvstatic.lattice.damage`); the
+        ``closed`` cracks (bool, n_bonds) with their whole spring. A model like any
+        other: ``dv.solve``, ``Solution.stress()`` and the writers take it."""
         micros = self.micros
         return dataclasses.replace(
-            self, calibration=micros if len(micros) > 1 else micros[0], damage=stiffness
+            self,
+            calibration=micros if len(micros) > 1 else micros[0],
+            damage=stiffness,
+            closed=closed,
         )
 
     def _check_calibration(self) -> None:
@@ -311,6 +327,8 @@ class VoronoiModel:
         if self.damage is not None:  # as lattice.damage.TriangleSplit.factors does
             d = self.damage
             spring = spring * np.maximum(d, RESIDUAL)
+            if self.closed is not None:
+                spring = np.where(self.closed, spring / np.maximum(d, RESIDUAL), spring)
             coupling = coupling * np.min(d[self.mesh.topology.tri_bonds], axis=1)
         return LatticeOperator(self.mesh, spring, coupling, barycentric=self.barycentric_images)
 

@@ -24,6 +24,11 @@ from .responses import per_bond, responses
 
 __all__ = ["Criterion", "Critical", "REGISTRY", "register", "criterion_for", "MODES"]
 
+#: bonds whose ratios lie within this fraction of the largest tie: the first of them (by
+#: index) is critical, so round-off (an update against a refactorisation, another BLAS)
+#: does not decide which of equally loaded bonds breaks
+TIE = 1e-9
+
 #: failure modes of a bond, by the code :meth:`Criterion.factors` gives: tension (the
 #: normal stress across the face), shear (the Coulomb line, the face not in compression)
 #: and crushing (the Coulomb line, the face in compression)
@@ -67,6 +72,12 @@ def linear_factors(vh, vg, threshold):
     np.divide(vh, threshold, out=excess, where=~ok & (threshold > 0))
     excess[excess < 1.0] = 0.0
     return ratio, excess
+
+
+def _first_of_largest(values: np.ndarray) -> int:
+    """The first index whose value ties with the largest (within :data:`TIE`)."""
+    top = float(values.max())
+    return int(np.flatnonzero(values >= top * (1.0 - TIE))[0]) if top > 0 else 0
 
 
 class Criterion(ABC):
@@ -161,7 +172,8 @@ class Criterion(ABC):
         ``xh + lambda xg`` (``xh`` the held part, None without one). Intact bonds
         (``d >= 1``) answer by the criterion, cracked ones by their elongation against
         the tooth's threshold; bonds the held part alone overloads come first, at
-        ``lambda = 0``, the most overloaded one first."""
+        ``lambda = 0``, the most overloaded one first; of bonds that tie (within
+        :data:`TIE`) the first by index."""
         sg = self.softening(xg)
         sh = 0.0 if xh is None else self.softening(xh)
         ratio, excess, mode = self.factors(xh, xg, w, g, intact, threshold)
@@ -173,10 +185,10 @@ class Criterion(ABC):
         gone = d <= 0
         ratio[gone] = excess[gone] = 0.0
         if np.any(excess >= 1.0):
-            e = int(np.argmax(excess))
+            e = _first_of_largest(excess)
             lam = 0.0
         else:
-            e = int(np.argmax(ratio))
+            e = _first_of_largest(ratio)
             lam = 1.0 / ratio[e] if ratio[e] > 0 else np.inf
         el = float(sg[e]) * (lam if np.isfinite(lam) else 0.0) + (0.0 if xh is None else sh[e])
         return Critical(e, lam, int(mode[e]), el)

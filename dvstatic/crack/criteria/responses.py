@@ -4,6 +4,7 @@ criteria make their strengths (docs/fracture.md)."""
 
 from __future__ import annotations
 
+import logging
 import math
 from collections.abc import Mapping
 
@@ -14,6 +15,8 @@ from ...lattice import VoronoiModel
 from ...linalg import ConstrainedSystem, DirectSolver
 from ...mesh import mesh_dof_order
 from ..strength import uniform_stress_loads
+
+log = logging.getLogger(__name__)
 
 __all__ = ["positive", "per_bond", "voigt", "responses"]
 
@@ -99,19 +102,21 @@ def _unit_mean_stress(mesh, K, us, thickness):
     """The three states recombined so that their mean stresses are exactly the unit
     stresses xx, yy, xy. A state with prescribed displacements has the stress the
     lattice's stiffness gives the prescribed strain, which differs from E times it by
-    the lattice's modulus error on this mesh; the mean stress over the body is what
-    equilibrium says, ``sum_i x_i (x) F_i / (A t)`` with ``F = K u`` (loads and
-    reactions), so the states are scaled to it (the load a bond fails at is then the
-    reactions' load, as measured)."""
+    the lattice's modulus error on this mesh (between platens every bond sees it, and
+    so do the reactions, which measure the load); the mean stress over the body is
+    what equilibrium says, ``sum_i x_i (x) F_i / (A t)`` with ``F = K u`` (loads and
+    reactions), so the states are scaled to it and a bond fails at the load the
+    reactions measure."""
     x = mesh.points
     area = float(mesh.triangle_areas.sum()) * thickness
     cols = []
     for u in us:
         f = (K @ u).reshape(-1, 2)
-        s = np.einsum("ni,nj->ij", x, f) / area
+        s = np.einsum("ni,nj->ij", x - x.mean(axis=0), f) / area
         s = 0.5 * (s + s.T)
         cols.append([s[0, 0], s[1, 1], s[0, 1]])
     m = np.linalg.inv(np.array(cols).T)  # state'_k = sum_j state_j m[j, k]
+    log.debug("uniform-stress responses: mean stresses %s", np.array(cols).round(6).tolist())
     return [sum(m[j, k] * us[j] for j in range(3)) for k in range(3)]
 
 
