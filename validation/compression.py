@@ -61,19 +61,22 @@ def prism_run(h: float, c=C, phi=PHI, p=0.0, seed=1, max_events=4000):
 
 def _held_equilibrium(model, res, held) -> float:
     """The largest relative residual ``|A u - b| / |b|`` of the constrained system of
-    every snapshot (the damaged stiffness assembled afresh, ``b`` the held pressure at
-    full value and the platens at the event's load factor; 0 without held loads)."""
+    every snapshot (the damaged stiffness assembled afresh, ``b`` the held loads at full
+    value and the growing loads and prescribed displacements at the event's load factor;
+    0 without held loads)."""
     if not held:
         return 0.0
     mesh = model.mesh
     s = split(model)
-    dofs, values = constraints(mesh, platens(mesh))
-    fh = load_vector(mesh, held)
+    dofs, values = constraints(mesh, list(res.supports))
+    fh = load_vector(mesh, list(held), thickness=model.t)
+    f = load_vector(mesh, list(res.loads), thickness=model.t) if res.loads else 0.0 * fh
     worst = 0.0
     for snap in res.snapshots:
         lam = res.events[snap.event].load_factor
-        system = ConstrainedSystem(s.stiffness(mesh, *s.factors(snap.stiffness, snap.closed)), dofs)
-        b = system.rhs(fh, lam * values)
+        k = s.stiffness(mesh, *s.factors(snap.stiffness, snap.closed))
+        system = ConstrainedSystem(k, dofs)
+        b = system.rhs(fh + lam * f, lam * values)
         r = system.A @ snap.u.ravel() - b
         worst = max(worst, float(np.linalg.norm(r) / np.linalg.norm(b)))
     return worst
@@ -164,6 +167,195 @@ def biaxial(h) -> dict:
     return {"rows": rows, "slope_peak": slope_peak, "slope_first": slope_first, "slope_mc": k}
 
 
+# ------------------------------------------------------------------ tunnel
+TUNNEL = dict(L=8.0, E=1e4, nu=0.25, ft=1.0, c=3.0, phi=30.0)
+
+
+def tunnel_model(h_near: float):
+    """A square block 2L x 2L with a circular tunnel of radius 1 at its centre (CVT,
+    graded from h_near at the wall to 0.6)."""
+    L = TUNNEL["L"]
+
+    def size(x):
+        r = np.hypot(x[:, 0] - L, x[:, 1] - L)
+        return np.minimum(0.6, h_near + 0.12 * np.maximum(r - 1.0, 0.0))
+
+    hole = dv.domain.Circle((L, L), 1.0, name="tunnel")
+    mesh = dv.mesh.rectangle(2 * L, 2 * L, size, kind="cvt", seed=1, holes=[hole])
+    model = dv.DV(mesh, E=TUNNEL["E"], nu=TUNNEL["nu"])
+
+    def near(p):
+        return int(np.argmin(np.hypot(*(mesh.points - np.asarray(p)).T)))
+
+    sup = [
+        dv.Fix([near((2 * L, L))], y=0.0),
+        dv.Fix([near((0.0, L))], y=0.0),
+        dv.Fix([near((L, 2 * L))], x=0.0),
+    ]
+    return model, sup
+
+
+def in_situ(K: float, p: float = 1.0):
+    """Far-field stresses sigma_v = -p, sigma_h = -K p as tractions on the block."""
+    return [
+        dv.Traction("top", (0.0, -p)),
+        dv.Traction("bottom", (0.0, p)),
+        dv.Traction("left", (K * p, 0.0)),
+        dv.Traction("right", (-K * p, 0.0)),
+    ]
+
+
+def _kirsch_onset(K: float) -> tuple[float, str]:
+    """The in-situ stress p at which the wall first fails in an infinite medium: the
+    crown's hoop tension (1 - 3 K) p against ft, or the sidewall's uniaxial hoop
+    compression (3 - K) p against the UCS."""
+    t = TUNNEL
+    tension = t["ft"] / (1 - 3 * K) if K < 1 / 3 else np.inf
+    crush = ucs(t["c"], t["phi"]) / (3 - K)
+    return (
+        (tension, "tension at the crown") if tension < crush else (crush, "crushing at the walls")
+    )
+
+
+def tunnel_onset(K: float, h_near: float) -> dict:
+    """Where and at what in-situ stress the first face fails, against Kirsch and against
+    P2 FE on the same block (its wall stresses put into the same envelope)."""
+    t, L = TUNNEL, TUNNEL["L"]
+    model, sup = tunnel_model(h_near)
+    loads = in_situ(K)
+    kw = dict(criterion="mohr-coulomb", cohesion=t["c"], friction_angle=t["phi"])
+    res = dv.fracture(model, sup, loads, ft=t["ft"], max_events=1, **kw)
+    ev = res.events[0]
+    mesh = model.mesh
+    mid = mesh.points[mesh.topology.bonds[ev.bond]].mean(axis=0) - L
+    fe = dv.fem.solve(mesh, t["E"], t["nu"], sup, loads, order=2, refine=1)
+    crown = fe.stress([[L, L + 1.0]])[0][0, 0]
+    wall = fe.stress([[L + 1.0, L]])[0][1, 1]
+    fe_p = min(t["ft"] / crown if crown > 0 else np.inf, ucs(t["c"], t["phi"]) / -wall)
+    kirsch, where = _kirsch_onset(K)
+    out = {
+        "K": K,
+        "nodes": mesh.n_points,
+        "p_first": ev.load_factor,
+        "mode": ev.mode,
+        "theta_deg": float(np.degrees(np.arctan2(mid[1], mid[0]))),
+        "r": float(np.hypot(*mid)),
+        "p_kirsch": kirsch,
+        "kirsch_where": where,
+        "p_fe": fe_p,
+        "fe_crown_hoop": crown,
+        "fe_wall_hoop": wall,
+    }
+    print(
+        f"  K = {K:g} ({out['nodes']} nodes): first failure at p = {ev.load_factor:.3f} "
+        f"({ev.mode}, theta = {out['theta_deg']:.0f} deg, r = {out['r']:.3f}); Kirsch "
+        f"{kirsch:.3f} ({where}); P2 FE on the same block {fe_p:.3f} "
+        f"({ev.load_factor / fe_p - 1:+.1%})"
+    )
+    return out
+
+
+def convergence_confinement(p0_over_ucs: float, h_near: float) -> dict:
+    """K = 1: the in-situ stress p0 and a support pressure p0 in the tunnel held; the
+    support pressure released by the load factor (lambda = 1: a free wall). Lame: the
+    wall fails when (1 + lambda) p0 = UCS + k (1 - lambda) p0."""
+    t = TUNNEL
+    strength = ucs(t["c"], t["phi"])
+    p0 = p0_over_ucs * strength
+    k = (1 + np.sin(np.radians(t["phi"]))) / (1 - np.sin(np.radians(t["phi"])))
+    model, sup = tunnel_model(h_near)
+    held = [*in_situ(1.0, p0), dv.Pressure("tunnel", p0)]
+    kw = dict(criterion="mohr-coulomb", cohesion=t["c"], friction_angle=t["phi"])
+    res = dv.fracture(
+        model,
+        sup,
+        [dv.Pressure("tunnel", -p0)],
+        held=held,
+        ft=t["ft"],
+        max_events=400,
+        stop_load_ratio=0.0,
+        **kw,
+    )
+    lam = np.array([e.load_factor for e in res.events])
+    lame = (strength + (k - 1) * p0) / ((1 + k) * p0)
+    out = {
+        "p0": p0,
+        "nodes": model.mesh.n_points,
+        "lambda_first": float(lam[0]),
+        "lambda_lame": float(lame),
+        "mode_first": res.events[0].mode,
+        "events": len(res.events),
+        "events_below_full_release": int(np.sum(lam <= 1.0)),
+        "stop": res.stop_reason,
+        "held_equilibrium": _held_equilibrium(model, res, held),
+    }
+    print(
+        f"  released support, K = 1, p0 = {p0_over_ucs:g} UCS: first failure at lambda = "
+        f"{lam[0]:.3f} ({res.events[0].mode}; Lame {lame:.3f}, {lam[0] / lame - 1:+.1%}); "
+        f"{out['events_below_full_release']} of {len(lam)} events at lambda <= 1; held "
+        f"equilibrium {out['held_equilibrium']:.1e}; stopped: {res.message}"
+    )
+    return out, res
+
+
+#: unit weight of the beam (force per area): its own weight alone stresses the bottom
+#: fibre at midspan to about 0.2 ft
+GAMMA = 0.1
+
+
+def beam_self_weight(h: float) -> dict:
+    """A beam 4 x 0.5 on two bearing pads 0.1 long (span 3.7) under its own weight (held)
+    and a growing point load at midspan (criterion stress): the held weight in every
+    state."""
+    mesh = dv.mesh.rectangle(4.0, 0.5, h, kind="cvt", seed=2)
+    model = dv.DV(mesh, E=3e4, nu=0.2)
+
+    def near(p):
+        return int(np.argmin(np.hypot(*(mesh.points - np.asarray(p)).T)))
+
+    x = mesh.points
+    bottom = np.abs(x[:, 1]) < 1e-12
+    # pads 0.1 long, 0.1 in from the ends (a pad at a corner concentrates its reaction on
+    # the corner's short bonds, which the held weight alone then breaks)
+    pads = [np.flatnonzero(bottom & (np.abs(x[:, 0] - c) <= 0.05)) for c in (0.15, 3.85)]
+    sup = [dv.Fix(pads[0], y=0.0), dv.Fix(pads[1], y=0.0), dv.Fix([near((0.15, 0.0))], x=0.0)]
+    weight = [dv.BodyForce((0.0, -GAMMA))]
+    load = [dv.PointLoad([near((2.0, 0.5))], (0.0, -1.0))]
+    res = dv.fracture(
+        model,
+        sup,
+        load,
+        held=weight,
+        ft=3.0,
+        gf=2e-3,
+        weibull=dv.Weibull(24, 0.1, seed=1),
+        max_events=3000,
+        stop_load_ratio=0.1,
+    )
+    mid = mesh.points[mesh.topology.bonds[res.broken]].mean(axis=1)
+    out = {
+        "nodes": mesh.n_points,
+        "events": len(res.events),
+        "peak_load": res.peak.load,
+        "first_load": res.events[0].load,
+        "held_equilibrium": _held_equilibrium(model, res, weight),
+        "crack_x": [float(mid[:, 0].min()), float(mid[:, 0].max())] if len(mid) else None,
+        "stop": res.stop_reason,
+    }
+    # the beam theory estimate of the first crack: bottom fibre stress at midspan
+    # (q L^2 / 8 + P L / 4) / (b d^2 / 6) = ft
+    # (span 3.7, overhangs 0.15: the weight's midspan moment q (S^2 / 8 - o^2 / 2))
+    q, S, o, d = GAMMA * 0.5, 3.7, 0.15, 0.5
+    out["first_load_beam_theory"] = (3.0 * d**2 / 6 - q * (S**2 / 8 - o**2 / 2)) / (S / 4)
+    print(
+        f"  beam under held self-weight ({out['nodes']} nodes): first crack at P = "
+        f"{out['first_load']:.4f} (beam theory {out['first_load_beam_theory']:.4f}), peak "
+        f"{out['peak_load']:.4f}, {len(res.broken)} bonds broken at x in "
+        f"{out['crack_x']}, held equilibrium {out['held_equilibrium']:.1e} ({out['stop']})"
+    )
+    return out, res
+
+
 def brazilian_mc(h: float) -> dict:
     """The Brazilian disc (fracture.py's set-up, ft = 3) with Mohr-Coulomb, c such that
     UCS = 10 ft (phi = 30 deg)."""
@@ -252,7 +444,15 @@ def main(argv=None) -> int:
     data["pairs"] = pairs(hs[0])
     data["biaxial"] = biaxial(hs[0])
     data["brazilian"], _ = brazilian_mc(0.08 if args.quick else 0.04)
+    h_near = 0.08 if args.quick else 0.04
+    print("tunnel under in-situ stress (square block 16 x 16, radius 1)")
+    data["tunnel"] = [tunnel_onset(K, h_near) for K in (0.2, 1.0)]
+    data["convergence_confinement"], _ = convergence_confinement(0.6, h_near)
+    data["beam_self_weight"], beam = beam_self_weight(0.08 if args.quick else 0.04)
     plot(results, data["biaxial"], args.out / "compression.png")
+    from dvstatic.pictures import write_crack_png
+
+    print("wrote", write_crack_png(args.out / "beam_self_weight.png", beam, "beam, held weight"))
     print("wrote", write_json(data, args.out / "compression.json"))
     return 0
 

@@ -2,6 +2,12 @@
 closes (unilateral contact on its bond), the contact status made consistent inside
 every event by an active set.
 
+The status is the solution of a convex problem: the lattice's energy with every cracked
+face's missing spring added back where its bond is shortened (a penalty form of
+non-penetration), a piecewise quadratic. Setting the status from the signs and solving
+is Newton's method on it (semismooth); :func:`line_search` damps the steps so that the
+energy falls at every pass, which keeps the active set from cycling.
+
 A closed face's bond carries compression with its whole spring (its triangles' coupling
 stays off, as for any cracked bond: its tension is then its spring times its
 elongation, and the stiffness stays symmetric positive semi-definite). A face is closed
@@ -14,9 +20,9 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["Contact", "MAX_ITERATIONS"]
+__all__ = ["Contact", "MAX_ITERATIONS", "line_search"]
 
-#: active-set passes per event before the last status is kept (and the event flagged)
+#: active-set passes per event before the last status is kept (and a warning given)
 MAX_ITERATIONS = 25
 
 
@@ -44,10 +50,36 @@ class Contact:
         """Bond factors as the pieces see them: 1 for a closed face, else ``d``."""
         return np.where(self.closed, 1.0, d) if self.closed.any() else d
 
-    def update(self, elongation: np.ndarray) -> np.ndarray:
-        """Set the status from a state's bond elongations (n_bonds,); returns the bonds
-        whose status changed."""
-        new = self.cracked & (elongation < 0)
-        changed = np.flatnonzero(new != self.closed)
-        self.closed = new
-        return changed
+    def status(self, elongation: np.ndarray) -> np.ndarray:
+        """The closed faces (bool, n_bonds) of a state's bond elongations (n_bonds,): the
+        cracked faces whose bonds are shortened."""
+        return self.cracked & (elongation < 0)
+
+    def set(self, status: np.ndarray) -> None:
+        """Take the closed faces ``status`` (bool, n_bonds)."""
+        self.closed = status
+
+
+def line_search(a0: float, a1: float, delta, step, extra) -> float:
+    """The step ``alpha`` in (0, 1] that minimises the energy along a Newton step.
+
+    The energy's derivative along the step ``d`` is ``a0 + alpha a1 + sum_e extra_e
+    min(delta_e + alpha step_e, 0) step_e``: ``a0 = (K_open z - F) . d`` and ``a1 = d .
+    K_open d`` (the lattice with every cracked face open), ``delta``/``step`` the
+    cracked faces' elongations at ``z`` and along ``d``, ``extra`` their missing
+    springs. It grows with ``alpha`` (convexity); its root is found by bisection.
+    """
+
+    def slope(alpha: float) -> float:
+        return a0 + alpha * a1 + float(np.sum(extra * np.minimum(delta + alpha * step, 0.0) * step))
+
+    if slope(1.0) <= 0.0:
+        return 1.0
+    lo, hi = 0.0, 1.0
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        if slope(mid) > 0.0:
+            hi = mid
+        else:
+            lo = mid
+    return max(hi, 1e-12)

@@ -15,24 +15,25 @@ from __future__ import annotations
 import dataclasses
 import inspect
 import logging
-import math
 import time
 
 import numpy as np
 
 from ..errors import InputError
 from ..lattice import VoronoiModel
+from ..lattice.damage import RESIDUAL
 from ..lattice.damage import split as _split
 from ..mesh import Mesh
 from ..problem import Problem
 from ..solvers.options import options_docstring
-from .contact import MAX_ITERATIONS, Contact
+from .bonds import Bonds, Kept
+from .contact import MAX_ITERATIONS, Contact, line_search
 from .control import criterion_parameters, held_problem, reference
 from .criteria import MODES, criterion_for, per_bond
 from .options import FractureOptions
 from .pieces import Pieces, bond_triangles
 from .result import Event, FractureResult, FractureStats, FractureTimings, Snapshot
-from .strength import MIN_EXCESS, Weibull, smallest_gf, teeth_at
+from .strength import Weibull, smallest_gf
 from .updates import UpdatedSolver
 
 log = logging.getLogger(__name__)
@@ -253,107 +254,13 @@ def _energies(model, gf, s_tension) -> np.ndarray:
     return BUFFON * gfb * model.t * face
 
 
-class _Bonds:
-    """The damage state of the bonds: stiffness factors, teeth and thresholds."""
-
-    def __init__(self, strength, spring, energy, teeth: int):
-        n = len(strength)
-        self.d = np.ones(n)
-        self.tooth = np.zeros(n, dtype=np.int64)
-        self.threshold = np.asarray(strength, float).copy()
-        self.spring, self.energy, self.teeth = spring, energy, teeth
-        self.steps: dict[int, tuple[np.ndarray, np.ndarray]] = {}
-
-    def state(self, cracked) -> dict:
-        """Everything :meth:`load` needs to go on from here (copies)."""
-        steps = {e: (a.copy(), b.copy()) for e, (a, b) in self.steps.items()}
-        return dict(
-            d=self.d.copy(),
-            tooth=self.tooth.copy(),
-            threshold=self.threshold.copy(),
-            steps=steps,
-            cracked=cracked.copy(),
-        )
-
-    def load(self, state: dict) -> None:
-        """Take the damage of an earlier run; intact bonds keep this run's thresholds."""
-        self.d[:] = state["d"]
-        self.tooth[:] = state["tooth"]
-        hit = self.d < 1.0
-        self.threshold[hit] = state["threshold"][hit]
-        self.steps = {e: (a.copy(), b.copy()) for e, (a, b) in state["steps"].items()}
-
-    def save(self, e: int):
-        """All stiffness factors and bond ``e``'s tooth state, for :meth:`restore`."""
-        return self.d.copy(), int(self.tooth[e]), float(self.threshold[e]), e in self.steps
-
-    def restore(self, e: int, saved) -> None:
-        d, tooth, threshold, had_steps = saved
-        self.d[:] = d
-        self.tooth[e], self.threshold[e] = tooth, threshold
-        if not had_steps:
-            self.steps.pop(e, None)
-
-    def advance(self, e: int, peak: float, brittle: bool = False) -> bool:
-        """Soften or remove bond ``e`` cracking at elongation ``peak`` (``brittle``:
-        remove it at once); True if removed."""
-        if brittle:
-            self.d[e] = 0.0
-            return True
-        if self.d[e] >= 1.0:
-            en = None if self.energy is None else self.energy[e]
-            if en is None or peak <= 0 or en <= 0.5 * self.spring[e] * peak**2 * (1 + MIN_EXCESS):
-                self.d[e] = 0.0
-                return True
-            d, delta = teeth_at(self.spring[e], peak, en, self.teeth)
-            self.steps[e] = (d[0], delta[0])
-        self.tooth[e] += 1
-        if self.tooth[e] >= self.teeth:
-            self.d[e] = 0.0
-            return True
-        d, delta = self.steps[e]
-        self.d[e] = d[self.tooth[e]]
-        self.threshold[e] = delta[self.tooth[e]]
-        return False
-
-
-class _Kept:
-    """The states kept for the VTU series: every ``every`` events if it is given, else
-    about ``target`` spread over the events actually run (the spacing doubles whenever
-    the kept states outgrow 4/3 of the target); always the peak and the last."""
-
-    def __init__(self, target: int, every: int | None):
-        self.fixed = every is not None
-        self.every = every or 1
-        self.cap = max(2, math.ceil(4 * target / 3))
-        self.kept: list[Snapshot] = []
-        self.peak = self.last = None
-
-    def add(self, snap: Snapshot, peak: bool) -> None:
-        self.last = snap
-        if peak:
-            self.peak = snap
-        if snap.event % self.every:
-            return
-        self.kept.append(snap)
-        if not self.fixed and len(self.kept) > self.cap:
-            self.every *= 2
-            self.kept = [s for s in self.kept if s.event % self.every == 0]
-
-    def states(self) -> tuple:
-        """The kept states, the peak and the last, in event order."""
-        extra = [s for s in (self.peak, self.last) if s is not None]
-        by_event = {s.event: s for s in [*self.kept, *extra]}
-        return tuple(by_event[k] for k in sorted(by_event))
-
-
 class _Analysis:
     """The event loop of :func:`fracture`: state, one event, the result."""
 
     def __init__(self, model, sp_, criterion, s0, energy, problem, opts):
         self.dofs, self.values, self.f, self.control, self.ref, self.fh = problem
         self.model, self.sp, self.criterion, self.s0, self.opts = model, sp_, criterion, s0, opts
-        self.bonds = _Bonds(s0, model.operator.spring, energy, opts.teeth)
+        self.bonds = Bonds(s0, model.operator.spring, energy, opts.teeth)
         self.solver = UpdatedSolver(
             model.mesh, sp_, self.dofs, self.values, self.f, max_rank=opts.max_rank
         )
@@ -361,8 +268,9 @@ class _Analysis:
         self.pieces = Pieces(model, self.dofs, self.values, loaded, opts.fragment)
         self.bond_tris = bond_triangles(model.mesh)
         self.contact = Contact(model.mesh.n_bonds, opts.contact)
+        self.spring = np.bincount(sp_.tri_bonds.ravel(), sp_.w.ravel(), sp_.n_bonds)
         self.initial = None
-        self.snaps = _Kept(opts.snapshots, opts.snapshot_every)
+        self.snaps = Kept(opts.snapshots, opts.snapshot_every)
         self.events: list[Event] = []
         self.broken: list[int] = []
         self.peak = 0.0
@@ -466,30 +374,82 @@ class _Analysis:
         return stop
 
     def _critical(self):
-        """The next event's critical bond with the contact status consistent: solve,
-        find the critical load factor, set every cracked face's status from that state,
-        and again until no status changes (at most :data:`MAX_ITERATIONS` passes)."""
-        bonds = self.bonds
+        """The next event's critical bond with the contact status consistent. Without
+        held loads the contact problem is positively homogeneous (zero gaps), so the
+        status of the state at load factor 1 is that of every factor: settle it there,
+        then find the critical bond. With held loads, settle the status at a trial
+        factor, find the critical factor, and again until the status at the critical
+        factor is the one it was found with."""
+        if not self.contact.active:
+            return self._criterion()
+        if self.xh is None:
+            self._settle(1.0)
+            return self._criterion()
+        lam = self.events[-1].load_factor if self.events else 1.0
         for _ in range(MAX_ITERATIONS):
-            w, g = self.factors()
-            intact = np.all(bonds.d[self.sp.tri_bonds] >= 1.0, axis=1).astype(float)
-            crit = self.criterion.critical(self.xh, self.x, w, g, intact, bonds.d, bonds.threshold)
-            if not self.contact.active or not np.isfinite(crit.factor):
+            self._settle(lam)
+            crit = self._criterion()
+            if not np.isfinite(crit.factor) or not self._settle(crit.factor):
                 return crit
-            state = crit.factor * self.x if self.xh is None else self.xh + crit.factor * self.x
-            changed = self.contact.update(self.criterion.softening(state))
-            if not len(changed):
-                return crit
-            self.solver.touch(np.unique(self.bond_tris[changed]))
-            if self.opts.max_rank == 0:
-                self.solver.rebase(*self.factors())
-            self._solve()
+            lam = crit.factor
+        log.warning(
+            "fracture: the load factor and the contact status of the closed cracks did not "
+            "settle together in %d passes; keeping the last ones",
+            MAX_ITERATIONS,
+        )
+        return self._criterion()
+
+    def _criterion(self):
+        bonds = self.bonds
+        w, g = self.factors()
+        intact = np.all(bonds.d[self.sp.tri_bonds] >= 1.0, axis=1).astype(float)
+        return self.criterion.critical(self.xh, self.x, w, g, intact, bonds.d, bonds.threshold)
+
+    def _at(self, lam: float) -> np.ndarray:
+        """The state (2N,) at load factor ``lam``."""
+        return lam * self.x if self.xh is None else self.xh + lam * self.x
+
+    def _settle(self, lam: float) -> bool:
+        """Make the contact status consistent with the state at load factor ``lam``
+        (damped semismooth Newton, :mod:`.contact`): set the status from the state,
+        solve, and when the new state disagrees with its status, step only as far as
+        the energy falls; True if the status changed."""
+        contact, soft = self.contact, self.criterion.softening
+        z, newton, moved = self._at(lam), True, False
+        for _ in range(MAX_ITERATIONS):
+            status = contact.status(soft(z))
+            if newton and np.array_equal(status, contact.closed):
+                return moved
+            changed = np.flatnonzero(status != contact.closed)
+            if len(changed):
+                contact.set(status)
+                moved = True
+                self.solver.touch(np.unique(self.bond_tris[changed]))
+                if self.opts.max_rank == 0:
+                    self.solver.rebase(*self.factors())
+                self._solve()
+            zn = self._at(lam)
+            if np.array_equal(contact.status(soft(zn)), contact.closed):
+                return moved
+            alpha = self._step(z, zn - z, lam)
+            log.debug("contact pass at %.4g: %d changed, step %.3g", lam, len(changed), alpha)
+            z, newton = z + alpha * (zn - z), alpha >= 1.0
         log.warning(
             "fracture: the contact status of the closed cracks did not settle in %d passes; "
             "keeping the last one",
             MAX_ITERATIONS,
         )
-        return crit
+        return moved
+
+    def _step(self, z: np.ndarray, d: np.ndarray, lam: float) -> float:
+        """The damped Newton step from ``z`` along ``d`` (:func:`.contact.line_search`)."""
+        w, g = self.sp.factors(self.bonds.d)  # every cracked face open
+        f = lam * self.f if self.fh is None else self.fh + lam * self.f
+        kz, kd = self.sp.internal(z, w, g), self.sp.internal(d, w, g)
+        c = self.contact.cracked
+        spring = self.spring[c] * (1.0 - np.maximum(self.bonds.d[c], RESIDUAL))
+        soft = self.criterion.softening
+        return line_search(float((kz - f) @ d), float(kd @ d), soft(z)[c], soft(d)[c], spring)
 
     def result(self, reason, message, timings, loop: float) -> FractureResult:
         mesh, events = self.model.mesh, self.events

@@ -99,6 +99,12 @@ class TriangleSplit:
         f = self.forces(u, w, g) if forces is None else forces
         return np.bincount(self.tri_bonds.ravel(), f.ravel(), self.n_bonds)
 
+    def internal(self, u: np.ndarray, w: np.ndarray, g: np.ndarray) -> np.ndarray:
+        """Internal nodal forces ``K u`` (2N,) of displacement ``u`` (2N,), without
+        assembling ``K``."""
+        fe = np.einsum("mkj,mk->mj", self.b, self.forces(u, w, g))
+        return np.bincount(self.dofs.ravel(), fe.ravel(), 2 * self.n_nodes)
+
     def patch_stress(self, u, w, g, length, area, weight=None, forces=None):
         """Mean stress (n_bonds, 2, 2) around every bond: the area-weighted mean, over the
         triangles at the bond's two end nodes, of the triangle stresses ``sum_k f_k l_k

@@ -1,0 +1,107 @@
+"""The state the event loop carries: every bond's damage (stiffness factor, saw-tooth
+step, threshold) and the states kept for the VTU series."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .result import Snapshot
+from .strength import MIN_EXCESS, teeth_at
+
+__all__ = ["Bonds", "Kept"]
+
+
+class Bonds:
+    """The damage state of the bonds: stiffness factors, teeth and thresholds."""
+
+    def __init__(self, strength, spring, energy, teeth: int):
+        n = len(strength)
+        self.d = np.ones(n)
+        self.tooth = np.zeros(n, dtype=np.int64)
+        self.threshold = np.asarray(strength, float).copy()
+        self.spring, self.energy, self.teeth = spring, energy, teeth
+        self.steps: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+
+    def state(self, cracked) -> dict:
+        """Everything :meth:`load` needs to go on from here (copies)."""
+        steps = {e: (a.copy(), b.copy()) for e, (a, b) in self.steps.items()}
+        return dict(
+            d=self.d.copy(),
+            tooth=self.tooth.copy(),
+            threshold=self.threshold.copy(),
+            steps=steps,
+            cracked=cracked.copy(),
+        )
+
+    def load(self, state: dict) -> None:
+        """Take the damage of an earlier run; intact bonds keep this run's thresholds."""
+        self.d[:] = state["d"]
+        self.tooth[:] = state["tooth"]
+        hit = self.d < 1.0
+        self.threshold[hit] = state["threshold"][hit]
+        self.steps = {e: (a.copy(), b.copy()) for e, (a, b) in state["steps"].items()}
+
+    def save(self, e: int):
+        """All stiffness factors and bond ``e``'s tooth state, for :meth:`restore`."""
+        return self.d.copy(), int(self.tooth[e]), float(self.threshold[e]), e in self.steps
+
+    def restore(self, e: int, saved) -> None:
+        d, tooth, threshold, had_steps = saved
+        self.d[:] = d
+        self.tooth[e], self.threshold[e] = tooth, threshold
+        if not had_steps:
+            self.steps.pop(e, None)
+
+    def advance(self, e: int, peak: float, brittle: bool = False) -> bool:
+        """Soften or remove bond ``e`` cracking at elongation ``peak`` (``brittle``:
+        remove it at once); True if removed."""
+        if brittle:
+            self.d[e] = 0.0
+            return True
+        if self.d[e] >= 1.0:
+            en = None if self.energy is None else self.energy[e]
+            if en is None or peak <= 0 or en <= 0.5 * self.spring[e] * peak**2 * (1 + MIN_EXCESS):
+                self.d[e] = 0.0
+                return True
+            d, delta = teeth_at(self.spring[e], peak, en, self.teeth)
+            self.steps[e] = (d[0], delta[0])
+        self.tooth[e] += 1
+        if self.tooth[e] >= self.teeth:
+            self.d[e] = 0.0
+            return True
+        d, delta = self.steps[e]
+        self.d[e] = d[self.tooth[e]]
+        self.threshold[e] = delta[self.tooth[e]]
+        return False
+
+
+class Kept:
+    """The states kept for the VTU series: every ``every`` events if it is given, else
+    about ``target`` spread over the events actually run (the spacing doubles whenever
+    the kept states outgrow 4/3 of the target); always the peak and the last."""
+
+    def __init__(self, target: int, every: int | None):
+        self.fixed = every is not None
+        self.every = every or 1
+        self.cap = max(2, math.ceil(4 * target / 3))
+        self.kept: list[Snapshot] = []
+        self.peak = self.last = None
+
+    def add(self, snap: Snapshot, peak: bool) -> None:
+        self.last = snap
+        if peak:
+            self.peak = snap
+        if snap.event % self.every:
+            return
+        self.kept.append(snap)
+        if not self.fixed and len(self.kept) > self.cap:
+            self.every *= 2
+            self.kept = [s for s in self.kept if s.event % self.every == 0]
+
+    def states(self) -> tuple:
+        """The kept states, the peak and the last, in event order."""
+        extra = [s for s in (self.peak, self.last) if s is not None]
+        by_event = {s.event: s for s in [*self.kept, *extra]}
+        return tuple(by_event[k] for k in sorted(by_event))
