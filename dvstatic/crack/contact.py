@@ -20,10 +20,15 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["Contact", "MAX_ITERATIONS", "line_search"]
+__all__ = ["Contact", "MAX_ITERATIONS", "TOLERANCE", "line_search"]
 
-#: active-set passes per event before the last status is kept (and a warning given)
-MAX_ITERATIONS = 25
+#: elongations within this fraction of the state's largest count as zero (a face there
+#: keeps its status)
+TOLERANCE = 1e-9
+
+#: Newton passes for one contact status before the last one is kept (and a warning
+#: given); nearly separated bodies take tens (the energy is flat there)
+MAX_ITERATIONS = 100
 
 
 class Contact:
@@ -52,8 +57,13 @@ class Contact:
 
     def status(self, elongation: np.ndarray) -> np.ndarray:
         """The closed faces (bool, n_bonds) of a state's bond elongations (n_bonds,): the
-        cracked faces whose bonds are shortened."""
-        return self.cracked & (elongation < 0)
+        cracked faces whose bonds are shortened. A face within :data:`TOLERANCE` of the
+        largest elongation of zero keeps its status (a face exactly at the turn carries
+        no force either way, and flipping it would stall the Newton passes)."""
+        tol = TOLERANCE * (float(np.max(np.abs(elongation))) or 1.0)
+        stays = self.closed & (elongation <= tol)
+        closes = ~self.closed & (elongation < -tol)
+        return self.cracked & (stays | closes)
 
     def set(self, status: np.ndarray) -> None:
         """Take the closed faces ``status`` (bool, n_bonds)."""

@@ -46,6 +46,9 @@ EQUILIBRIUM_TOL = 1e-10
 #: average (Buffon: sum_e r_e l_e |sin theta_e| / A with sum_e r_e l_e = 2 A and the mean
 #: |sin| 2 / pi): each bond gets this share of gf times its face
 BUFFON = np.pi / 4
+#: segments of the load factor (held loads and closed cracks: the factors at which a
+#: cracked face opens or closes) followed for one event before the last status is kept
+OUTER = 500
 #: secant stiffness (relative to the initial one) below which the body is a mechanism
 MECHANISM = 1e-6
 
@@ -377,25 +380,42 @@ class _Analysis:
         """The next event's critical bond with the contact status consistent. Without
         held loads the contact problem is positively homogeneous (zero gaps), so the
         status of the state at load factor 1 is that of every factor: settle it there,
-        then find the critical bond. With held loads, settle the status at a trial
-        factor, find the critical factor, and again until the status at the critical
-        factor is the one it was found with."""
+        then find the critical bond. With held loads, follow the load factor up from 0
+        (:meth:`_follow`)."""
         if not self.contact.active:
             return self._criterion()
         if self.xh is None:
             self._settle(1.0)
             return self._criterion()
-        lam = self.events[-1].load_factor if self.events else 1.0
-        for _ in range(MAX_ITERATIONS):
-            self._settle(lam)
+        return self._follow()
+
+    def _follow(self):
+        """With held loads and closed cracks, the state is linear in the load factor
+        only between the factors where a cracked face opens or closes. Settle the status
+        at factor 0, then walk up segment by segment: the first bond that fails within
+        a segment is the event; otherwise cross to the next segment (at most
+        :data:`OUTER` of them, then the last status is kept, with a warning)."""
+        lam, soft = 0.0, self.criterion.softening
+        self._settle(lam)
+        for _ in range(OUTER):
             crit = self._criterion()
-            if not np.isfinite(crit.factor) or not self._settle(crit.factor):
+            c = self.contact.cracked
+            dh, dg = soft(self.xh)[c], soft(self.x)[c]
+            closed = self.contact.closed[c]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                cross = -dh / dg
+            # a closed face opens as its elongation rises through 0, an open one closes
+            # as it falls through 0
+            turns = np.where(closed, dg > 0, dg < 0) & (cross > lam)
+            nxt = float(cross[turns].min()) if turns.any() else np.inf
+            if crit.factor <= nxt:
                 return crit
-            lam = crit.factor
+            lam = nxt * (1 + 1e-9) + 1e-15
+            self._settle(lam)
         log.warning(
-            "fracture: the load factor and the contact status of the closed cracks did not "
-            "settle together in %d passes; keeping the last ones",
-            MAX_ITERATIONS,
+            "fracture: the closed cracks changed status more than %d times below the load "
+            "factor of the next event; keeping the last status",
+            OUTER,
         )
         return self._criterion()
 
