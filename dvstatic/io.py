@@ -291,7 +291,10 @@ def write_fracture_series(folder: str | Path, result, name: str = "fracture") ->
             code[ev.bond] = 1 + MODES.index(ev.mode)
     states = [(s.event, s.u, s.stiffness, s.closed) for s in result.snapshots]
     last = len(result.events)
-    states.append((last, result.u, result.stiffness, None))
+    final = np.zeros(mesh.n_bonds, dtype=bool)
+    if result.events:
+        final[list(result.events[-1].closed)] = True
+    states.append((last, result.u, result.stiffness, final if final.any() else None))
     entries = []
     for k, (event, u, d, closed) in enumerate(states):
         virial = np.zeros((mesh.n_points, 9))

@@ -275,3 +275,77 @@ def test_updates_give_the_same_events_as_refactorising_under_held_loads():
     lf = np.array([[a.load_factor, b.load_factor] for a, b in pairs])
     assert np.allclose(lf[:, 0], lf[:, 1], rtol=1e-8)
     assert fast.stats.factorisations < slow.stats.factorisations / 10
+
+
+def test_with_held_loads_every_recorded_contact_status_is_consistent():
+    """A cracked plate loaded again under held pressures and growing tractions: in every
+    recorded state no closed face pulls and no open cracked face overlaps (the load
+    factor is followed up from 0 through the factors where faces turn)."""
+    mesh = dv.mesh.rectangle(2.0, 1.0, 0.07, kind="cvt", seed=3)
+    model = dv.DV(mesh, E=3e4, nu=NU)
+    weibull = dv.Weibull(12, 0.0, seed=4)
+    cracked = dv.fracture(model, grips(mesh, 1e-3), None, ft=3.0, weibull=weibull, max_events=12)
+    sup = [dv.Fix(at=(0, 0), x=0, y=0), dv.Fix(at=(2, 0), y=0)]
+    held = [dv.Pressure("left", 2.0), dv.Pressure("right", 2.0), dv.Pressure("top", 1.0)]
+    grow = [
+        dv.Traction("right", (1.0, 0.2)),
+        dv.Traction("left", (-1.0, -0.2)),
+        dv.Traction("top", (0.0, 0.5)),
+    ]
+    res = dv.fracture(
+        model,
+        sup,
+        grow,
+        held=held,
+        ft=3.0,
+        weibull=weibull,
+        start=cracked,
+        max_events=15,
+        stop_load_ratio=0.0,
+        snapshot_every=1,
+    )
+    n, bonds = model.geometry.direction, mesh.topology.bonds
+    faces = cracked.bond_state["cracked"]
+    assert any(len(e.closed) for e in res.events)
+    for snap in res.snapshots:
+        el = np.einsum("ei,ei->e", n, snap.u[bonds[:, 1]] - snap.u[bonds[:, 0]])
+        closed = np.zeros(len(el), dtype=bool)
+        closed[list(res.events[snap.event].closed)] = True
+        tol = 1e-6 * np.abs(el).max()
+        assert not np.any(closed & (el > tol))
+        assert not np.any(faces & ~closed & (snap.stiffness < 1) & (el < -tol))
+
+
+def test_going_on_needs_the_same_teeth_and_held_errors_name_held():
+    model, _ = cracked_through()
+    soft = dv.fracture(
+        model, grips(model.mesh, 1e-3), None, ft=3.0, gf=0.05, teeth=3, max_events=20
+    )
+    assert soft.bond_state["steps"]
+    with pytest.raises(dv.InputError) as info:
+        dv.fracture(model, grips(model.mesh, -1e-3), None, ft=3.0, gf=0.05, teeth=30, start=soft)
+    assert info.value.param == "teeth"
+    sup, loads = pulled()
+    with pytest.raises(dv.InputError) as info:
+        dv.fracture(plate(), sup, loads, held=[dv.Pressure("nowhere", 1.0)], ft=FT)
+    assert info.value.param == "held"
+    with pytest.raises(TypeError, match="held"):
+        dv.fracture(plate(), sup, loads, held=3.0, ft=FT)
+
+
+def test_events_under_held_loads_release_energy():
+    """Held loads that tear a softening plate apart on their own: the events (all at
+    load factor 0) release the energy of the loads' work at fixed loads (> 0)."""
+    sup, loads = pulled(FT)
+    res = dv.fracture(
+        plate(),
+        sup,
+        loads,
+        held=pulled(1.2 * FT)[1],
+        ft=FT,
+        gf=0.01,
+        max_events=60,
+        stop_load_ratio=0.0,
+    )
+    assert all(e.load_factor == 0.0 for e in res.events)
+    assert res.dissipated > 0 and all(e.released >= -1e-12 for e in res.events)

@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 
+from ..errors import InputError
 from .result import Snapshot
 from .strength import MIN_EXCESS, teeth_at
 
@@ -33,10 +34,23 @@ class Bonds:
             threshold=self.threshold.copy(),
             steps=steps,
             cracked=cracked.copy(),
+            teeth=self.teeth,
         )
 
     def load(self, state: dict) -> None:
-        """Take the damage of an earlier run; intact bonds keep this run's thresholds."""
+        """Take the damage of an earlier run; intact bonds keep this run's thresholds.
+
+        Raises
+        ------
+        InputError
+            If the earlier run softened bonds in another number of teeth.
+        """
+        if state["steps"] and state["teeth"] != self.teeth:
+            raise InputError(
+                f"start: the earlier run softened bonds in teeth = {state['teeth']} steps; "
+                f"go on with the same teeth (got {self.teeth})",
+                "teeth",
+            )
         self.d[:] = state["d"]
         self.tooth[:] = state["tooth"]
         hit = self.d < 1.0

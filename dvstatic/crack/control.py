@@ -118,4 +118,9 @@ def held_problem(model, held) -> Problem | None:
                 "the supports go in `supports` (their prescribed values grow with the load "
                 "factor)"
             )
-    return Problem.build(model, None, list(items), restrained=False)
+    try:
+        return Problem.build(model, None, list(items), restrained=False)
+    except InputError as exc:
+        raise InputError(f"held: {exc}", "held") from exc
+    except TypeError as exc:
+        raise TypeError(f"held: {exc}") from exc

@@ -37,7 +37,8 @@ class Event:
     residual : float
         Relative residual of the equilibrium solve of this state.
     released : float
-        Energy released by the event at fixed control displacement (force x length).
+        Energy released by the event at fixed control displacement (force x length);
+        with held loads, with every load and prescribed displacement fixed.
     elongation : float
         The bond's elongation at the event (length).
     spring_lost : float

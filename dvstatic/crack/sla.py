@@ -320,6 +320,7 @@ class _Analysis:
         saved = bonds.save(e)
         cracked, closed = bool(self.contact.cracked[e]), self.contact.closed.copy()
         before = (self.res, self.p_ref, self.u_ref, self.xh, self.p_held, self.u_held)
+        state = (self._at(lam), self.factors()) if self.fh is not None else None
         try:
             removed = bonds.advance(e, crit.elongation, brittle=crit.mode != 0)
             if crit.mode == 0:
@@ -346,7 +347,11 @@ class _Analysis:
             tooth=int(saved[1]),
             broken=removed,
             residual=res,
-            released=0.5 * delta * (lam * p_ref - after),
+            released=(
+                0.5 * delta * (lam * p_ref - after)
+                if state is None
+                else self._released(lam, *state)
+            ),
             elongation=crit.elongation,
             spring_lost=float(saved[0][e] - bonds.d[e]),
             mode=MODES[crit.mode],
@@ -376,6 +381,16 @@ class _Analysis:
             stop = (stop[0], "under the held loads alone (load factor 0): " + stop[1])
         return stop
 
+    def _released(self, lam: float, u0: np.ndarray, factors0) -> float:
+        """With held loads: the energy the event releases with every load and prescribed
+        displacement fixed, ``F . (u' - u) / 2 + u_p . (R - R') / 2`` (``u``, ``R``
+        before the bond's change, ``u'``, ``R'`` after it, at the same load factor)."""
+        f = self.fh + lam * self.f
+        u1 = self._at(lam)
+        r0 = (self.sp.internal(u0, *factors0) - f)[self.dofs]
+        r1 = (self.sp.internal(u1, *self.factors()) - f)[self.dofs]
+        return float(0.5 * f @ (u1 - u0) + 0.5 * (lam * self.values) @ (r0 - r1))
+
     def _critical(self):
         """The next event's critical bond with the contact status consistent. Without
         held loads the contact problem is positively homogeneous (zero gaps), so the
@@ -393,24 +408,35 @@ class _Analysis:
         """With held loads and closed cracks, the state is linear in the load factor
         only between the factors where a cracked face opens or closes. Settle the status
         at factor 0, then walk up segment by segment: the first bond that fails within
-        a segment is the event; otherwise cross to the next segment (at most
-        :data:`OUTER` of them, then the last status is kept, with a warning)."""
+        a segment (counted from the segment's start) is the event; otherwise turn the
+        faces at the segment's end and go on (at most :data:`OUTER` segments, then the
+        last status is kept, with a warning)."""
         lam, soft = 0.0, self.criterion.softening
         self._settle(lam)
         for _ in range(OUTER):
-            crit = self._criterion()
-            c = self.contact.cracked
-            dh, dg = soft(self.xh)[c], soft(self.x)[c]
+            start = self._at(lam)
+            crit = self._criterion(start)
+            crit = crit._replace(factor=lam + crit.factor)
+            c = np.flatnonzero(self.contact.cracked)
+            dh, dg = soft(start)[c], soft(self.x)[c]
             closed = self.contact.closed[c]
             with np.errstate(divide="ignore", invalid="ignore"):
-                cross = -dh / dg
+                ahead = -dh / dg  # beyond the segment's start
             # a closed face opens as its elongation rises through 0, an open one closes
             # as it falls through 0
-            turns = np.where(closed, dg > 0, dg < 0) & (cross > lam)
-            nxt = float(cross[turns].min()) if turns.any() else np.inf
+            turns = np.where(closed, dg > 0, dg < 0) & (ahead > 1e-12 * max(lam, 1.0))
+            nxt = lam + float(ahead[turns].min()) if turns.any() else np.inf
             if crit.factor <= nxt:
                 return crit
-            lam = nxt * (1 + 1e-9) + 1e-15
+            at = c[turns & (lam + ahead <= nxt * (1 + 1e-12))]
+            status = self.contact.closed.copy()
+            status[at] = ~status[at]
+            self.contact.set(status)
+            self.solver.touch(np.unique(self.bond_tris[at]))
+            if self.opts.max_rank == 0:
+                self.solver.rebase(*self.factors())
+            self._solve()
+            lam = nxt
             self._settle(lam)
         log.warning(
             "fracture: the closed cracks changed status more than %d times below the load "
@@ -419,11 +445,14 @@ class _Analysis:
         )
         return self._criterion()
 
-    def _criterion(self):
+    def _criterion(self, held=None):
+        """The criterion's next event under ``held + lambda x`` (``held`` default: the
+        held loads' state)."""
         bonds = self.bonds
         w, g = self.factors()
         intact = np.all(bonds.d[self.sp.tri_bonds] >= 1.0, axis=1).astype(float)
-        return self.criterion.critical(self.xh, self.x, w, g, intact, bonds.d, bonds.threshold)
+        held = self.xh if held is None else held
+        return self.criterion.critical(held, self.x, w, g, intact, bonds.d, bonds.threshold)
 
     def _at(self, lam: float) -> np.ndarray:
         """The state (2N,) at load factor ``lam``."""
@@ -431,11 +460,12 @@ class _Analysis:
 
     def _settle(self, lam: float) -> bool:
         """Make the contact status consistent with the state at load factor ``lam``
-        (damped semismooth Newton, :mod:`.contact`): set the status from the state,
-        solve, and when the new state disagrees with its status, step only as far as
-        the energy falls; True if the status changed."""
+        (semismooth Newton on the contact energy, :mod:`.contact`): set the status from
+        the state and solve; take the new state while the energy falls, else step only as
+        far as it falls along the way; True if the status changed."""
         contact, soft = self.contact, self.criterion.softening
         z, newton, moved = self._at(lam), True, False
+        energy = self._energy(z, lam)
         for _ in range(MAX_ITERATIONS):
             status = contact.status(soft(z))
             if newton and np.array_equal(status, contact.closed):
@@ -451,9 +481,13 @@ class _Analysis:
             zn = self._at(lam)
             if np.array_equal(contact.status(soft(zn)), contact.closed):
                 return moved
+            e_new = self._energy(zn, lam)
+            if e_new < energy:  # a full Newton step that lowers the energy
+                z, energy, newton = zn, e_new, True
+                continue
             alpha = self._step(z, zn - z, lam)
-            log.debug("contact pass at %.4g: %d changed, step %.3g", lam, len(changed), alpha)
-            z, newton = z + alpha * (zn - z), alpha >= 1.0
+            z = z + alpha * (zn - z)
+            energy, newton = self._energy(z, lam), alpha >= 1.0
         log.warning(
             "fracture: the contact status of the closed cracks did not settle in %d passes; "
             "keeping the last one",
@@ -461,15 +495,29 @@ class _Analysis:
         )
         return moved
 
+    def _open(self):
+        """The stiffness factors with every cracked face open, and every cracked face's
+        missing spring (the contact's penalty)."""
+        w, g = self.sp.factors(self.bonds.d)
+        c = self.contact.cracked
+        return w, g, c, self.spring[c] * (1.0 - np.maximum(self.bonds.d[c], RESIDUAL))
+
+    def _energy(self, z: np.ndarray, lam: float) -> float:
+        """The contact energy of state ``z`` at load factor ``lam``: the lattice with the
+        cracked faces open, their missing springs where they are shortened, minus the
+        loads' work."""
+        w, g, c, extra = self._open()
+        f = lam * self.f if self.fh is None else self.fh + lam * self.f
+        short = np.minimum(self.criterion.softening(z)[c], 0.0)
+        return float(0.5 * z @ self.sp.internal(z, w, g) - f @ z + 0.5 * extra @ short**2)
+
     def _step(self, z: np.ndarray, d: np.ndarray, lam: float) -> float:
         """The damped Newton step from ``z`` along ``d`` (:func:`.contact.line_search`)."""
-        w, g = self.sp.factors(self.bonds.d)  # every cracked face open
+        w, g, c, extra = self._open()
         f = lam * self.f if self.fh is None else self.fh + lam * self.f
         kz, kd = self.sp.internal(z, w, g), self.sp.internal(d, w, g)
-        c = self.contact.cracked
-        spring = self.spring[c] * (1.0 - np.maximum(self.bonds.d[c], RESIDUAL))
         soft = self.criterion.softening
-        return line_search(float((kz - f) @ d), float(kd @ d), soft(z)[c], soft(d)[c], spring)
+        return line_search(float((kz - f) @ d), float(kd @ d), soft(z)[c], soft(d)[c], extra)
 
     def result(self, reason, message, timings, loop: float) -> FractureResult:
         mesh, events = self.model.mesh, self.events

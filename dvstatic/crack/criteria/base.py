@@ -71,6 +71,7 @@ def linear_factors(vh, vg, threshold):
     excess = np.zeros(len(vg))
     np.divide(vh, threshold, out=excess, where=~ok & (threshold > 0))
     excess[excess < 1.0] = 0.0
+    excess[~ok & ~(threshold > 0)] = np.inf  # no strength left: fails at once
     return ratio, excess
 
 
