@@ -106,7 +106,10 @@ def petersson_run(h: float, model=dv.DV, kind: str = "jittered", **kw):
         (0, D),
     ]
     mesh = dv.mesh.polygon(verts, h, seed=0, kind=kind)
-    sup = [dv.Fix(at=(0, 0), x=0, y=0), dv.Fix(at=(L, 0), y=0), dv.Fix(at=(L / 2, D), y=-1.0)]
+    # the loading point: the top node nearest midspan (a mesh of lattice rows need not
+    # have one exactly there)
+    top = int(np.argmin(np.hypot(mesh.points[:, 0] - L / 2, mesh.points[:, 1] - D)))
+    sup = [dv.Fix(at=(0, 0), x=0, y=0), dv.Fix(at=(L, 0), y=0), dv.Fix([top], y=-1.0)]
     lattice = model(mesh, E=b["E"], nu=b["nu"], thickness=b["t"])
     return dv.fracture(lattice, sup, ft=b["ft"], gf=b["gf"], **kw)
 
