@@ -21,18 +21,18 @@ import numpy as np
 
 from ..errors import InputError
 from ..lattice import VoronoiModel
-from ..lattice.damage import RESIDUAL
 from ..lattice.damage import split as _split
 from ..mesh import Mesh
 from ..problem import Problem
 from ..solvers.options import options_docstring
 from .bonds import Bonds, Kept
-from .contact import MAX_ITERATIONS, Contact, line_search
+from .contact import Contact
 from .control import criterion_parameters, held_problem, reference
 from .criteria import MODES, criterion_for, per_bond
 from .options import FractureOptions
 from .pieces import Pieces, bond_triangles
 from .result import Event, FractureResult, FractureStats, FractureTimings, Snapshot
+from .search import EventSearch
 from .strength import Weibull, smallest_gf
 from .updates import UpdatedSolver
 
@@ -46,9 +46,6 @@ EQUILIBRIUM_TOL = 1e-10
 #: average (Buffon: sum_e r_e l_e |sin theta_e| / A with sum_e r_e l_e = 2 A and the mean
 #: |sin| 2 / pi): each bond gets this share of gf times its face
 BUFFON = np.pi / 4
-#: segments of the load factor (held loads and closed cracks: the factors at which a
-#: cracked face opens or closes) followed for one event before the last status is kept
-OUTER = 500
 #: secant stiffness (relative to the initial one) below which the body is a mechanism
 MECHANISM = 1e-6
 
@@ -257,7 +254,7 @@ def _energies(model, gf, s_tension) -> np.ndarray:
     return BUFFON * gfb * model.t * face
 
 
-class _Analysis:
+class _Analysis(EventSearch):
     """The event loop of :func:`fracture`: state, one event, the result."""
 
     def __init__(self, model, sp_, criterion, s0, energy, problem, opts):
@@ -390,134 +387,6 @@ class _Analysis:
         r0 = (self.sp.internal(u0, *factors0) - f)[self.dofs]
         r1 = (self.sp.internal(u1, *self.factors()) - f)[self.dofs]
         return float(0.5 * f @ (u1 - u0) + 0.5 * (lam * self.values) @ (r0 - r1))
-
-    def _critical(self):
-        """The next event's critical bond with the contact status consistent. Without
-        held loads the contact problem is positively homogeneous (zero gaps), so the
-        status of the state at load factor 1 is that of every factor: settle it there,
-        then find the critical bond. With held loads, follow the load factor up from 0
-        (:meth:`_follow`)."""
-        if not self.contact.active:
-            return self._criterion()
-        if self.xh is None:
-            self._settle(1.0)
-            return self._criterion()
-        return self._follow()
-
-    def _follow(self):
-        """With held loads and closed cracks, the state is linear in the load factor
-        only between the factors where a cracked face opens or closes. Settle the status
-        at factor 0, then walk up segment by segment: the first bond that fails within
-        a segment (counted from the segment's start) is the event; otherwise turn the
-        faces at the segment's end and go on (at most :data:`OUTER` segments, then the
-        last status is kept, with a warning)."""
-        lam, soft = 0.0, self.criterion.softening
-        self._settle(lam)
-        for _ in range(OUTER):
-            start = self._at(lam)
-            crit = self._criterion(start)
-            crit = crit._replace(factor=lam + crit.factor)
-            c = np.flatnonzero(self.contact.cracked)
-            dh, dg = soft(start)[c], soft(self.x)[c]
-            closed = self.contact.closed[c]
-            with np.errstate(divide="ignore", invalid="ignore"):
-                ahead = -dh / dg  # beyond the segment's start
-            # a closed face opens as its elongation rises through 0, an open one closes
-            # as it falls through 0
-            turns = np.where(closed, dg > 0, dg < 0) & (ahead > 1e-12 * max(lam, 1.0))
-            nxt = lam + float(ahead[turns].min()) if turns.any() else np.inf
-            if crit.factor <= nxt:
-                return crit
-            at = c[turns & (lam + ahead <= nxt * (1 + 1e-12))]
-            status = self.contact.closed.copy()
-            status[at] = ~status[at]
-            self.contact.set(status)
-            self.solver.touch(np.unique(self.bond_tris[at]))
-            if self.opts.max_rank == 0:
-                self.solver.rebase(*self.factors())
-            self._solve()
-            lam = nxt
-            self._settle(lam)
-        log.warning(
-            "fracture: the closed cracks changed status more than %d times below the load "
-            "factor of the next event; keeping the last status",
-            OUTER,
-        )
-        return self._criterion()
-
-    def _criterion(self, held=None):
-        """The criterion's next event under ``held + lambda x`` (``held`` default: the
-        held loads' state)."""
-        bonds = self.bonds
-        w, g = self.factors()
-        intact = np.all(bonds.d[self.sp.tri_bonds] >= 1.0, axis=1).astype(float)
-        held = self.xh if held is None else held
-        return self.criterion.critical(held, self.x, w, g, intact, bonds.d, bonds.threshold)
-
-    def _at(self, lam: float) -> np.ndarray:
-        """The state (2N,) at load factor ``lam``."""
-        return lam * self.x if self.xh is None else self.xh + lam * self.x
-
-    def _settle(self, lam: float) -> bool:
-        """Make the contact status consistent with the state at load factor ``lam``
-        (semismooth Newton on the contact energy, :mod:`.contact`): set the status from
-        the state and solve; take the new state while the energy falls, else step only as
-        far as it falls along the way; True if the status changed."""
-        contact, soft = self.contact, self.criterion.softening
-        z, newton, moved = self._at(lam), True, False
-        energy = self._energy(z, lam)
-        for _ in range(MAX_ITERATIONS):
-            status = contact.status(soft(z))
-            if newton and np.array_equal(status, contact.closed):
-                return moved
-            changed = np.flatnonzero(status != contact.closed)
-            if len(changed):
-                contact.set(status)
-                moved = True
-                self.solver.touch(np.unique(self.bond_tris[changed]))
-                if self.opts.max_rank == 0:
-                    self.solver.rebase(*self.factors())
-                self._solve()
-            zn = self._at(lam)
-            if np.array_equal(contact.status(soft(zn)), contact.closed):
-                return moved
-            e_new = self._energy(zn, lam)
-            if e_new < energy:  # a full Newton step that lowers the energy
-                z, energy, newton = zn, e_new, True
-                continue
-            alpha = self._step(z, zn - z, lam)
-            z = z + alpha * (zn - z)
-            energy, newton = self._energy(z, lam), alpha >= 1.0
-        log.warning(
-            "fracture: the contact status of the closed cracks did not settle in %d passes; "
-            "keeping the last one",
-            MAX_ITERATIONS,
-        )
-        return moved
-
-    def _open(self):
-        """The stiffness factors with every cracked face open, and every cracked face's
-        missing spring (the contact's penalty)."""
-        w, g = self.sp.factors(self.bonds.d)
-        c = self.contact.cracked
-        return w, g, c, self.spring[c] * (1.0 - np.maximum(self.bonds.d[c], RESIDUAL))
-
-    def _energy(self, z: np.ndarray, lam: float) -> float:
-        """The contact energy of state ``z`` at load factor ``lam``: the lattice with the
-        cracked faces open, their missing springs where they are shortened, minus the
-        loads' work."""
-        w, g, c, extra = self._open()
-        f = lam * self.f if self.fh is None else self.fh + lam * self.f
-        short = np.minimum(self.criterion.softening(z)[c], 0.0)
-        return float(0.5 * z @ self.sp.internal(z, w, g) - f @ z + 0.5 * extra @ short**2)
-
-    def _step(self, z: np.ndarray, d: np.ndarray, lam: float) -> float:
-        """The damped Newton step from ``z`` along ``d`` (:func:`.contact.line_search`)."""
-        w, g, c, extra = self._open()
-        f = lam * self.f if self.fh is None else self.fh + lam * self.f
-        kz, kd = self.sp.internal(z, w, g), self.sp.internal(d, w, g)
-        soft = self.criterion.softening
-        return line_search(float((kz - f) @ d), float(kd @ d), soft(z)[c], soft(d)[c], extra)
 
     def result(self, reason, message, timings, loop: float) -> FractureResult:
         mesh, events = self.model.mesh, self.events
