@@ -14,7 +14,7 @@ import numpy as np
 from ..lattice.damage import RESIDUAL
 from .contact import MAX_ITERATIONS, line_search
 
-log = logging.getLogger("dvstatic.crack.sla")
+log = logging.getLogger(__name__)
 
 __all__ = ["EventSearch", "OUTER"]
 
