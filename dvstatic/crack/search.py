@@ -93,6 +93,10 @@ class EventSearch:
         """The state (2N,) at load factor ``lam``."""
         return lam * self.x if self.xh is None else self.xh + lam * self.x
 
+    def _loads(self, lam: float) -> np.ndarray:
+        """The nodal forces (2N,) at load factor ``lam`` (held ones at full value)."""
+        return lam * self.f if self.fh is None else self.fh + lam * self.f
+
     def _settle(self, lam: float) -> bool:
         """Make the contact status consistent with the state at load factor ``lam``
         (semismooth Newton on the contact energy, :mod:`.contact`): set the status from
@@ -142,14 +146,14 @@ class EventSearch:
         cracked faces open, their missing springs where they are shortened, minus the
         loads' work."""
         w, g, c, extra = self._open()
-        f = lam * self.f if self.fh is None else self.fh + lam * self.f
+        f = self._loads(lam)
         short = np.minimum(self.criterion.softening(z)[c], 0.0)
         return float(0.5 * z @ self.sp.internal(z, w, g) - f @ z + 0.5 * extra @ short**2)
 
     def _step(self, z: np.ndarray, d: np.ndarray, lam: float) -> float:
         """The damped Newton step from ``z`` along ``d`` (:func:`.contact.line_search`)."""
         w, g, c, extra = self._open()
-        f = lam * self.f if self.fh is None else self.fh + lam * self.f
+        f = self._loads(lam)
         kz, kd = self.sp.internal(z, w, g), self.sp.internal(d, w, g)
         soft = self.criterion.softening
         return line_search(float((kz - f) @ d), float(kd @ d), soft(z)[c], soft(d)[c], extra)

@@ -112,13 +112,13 @@ def fracture(
     t_start = time.perf_counter()
     problem = Problem.build(model, supports, loads)
     dofs, values, f, control, ref = reference(model, problem)
-    held = held_problem(model, held)
+    kept = held_problem(model, held)
     sp_ = _split(model)
     criterion = criterion_for(opts.criterion, model, sp_)
     s0, s_tension = criterion.prepare(model, ft, weibull, timings, dofs, params)
     energy = None if gf is None else _energies(model, gf, s_tension)
     _warn_rows(model.mesh)
-    fh = None if held is None else held.f
+    fh = None if kept is None else kept.f
     res = _run(
         model,
         sp_,
@@ -135,7 +135,7 @@ def fracture(
         res,
         supports=problem.supports,
         loads=problem.loads,
-        held=() if held is None else held.loads,
+        held=() if kept is None else kept.loads,
     )
 
 
@@ -382,7 +382,7 @@ class _Analysis(EventSearch):
         """With held loads: the energy the event releases with every load and prescribed
         displacement fixed, ``F . (u' - u) / 2 + u_p . (R - R') / 2`` (``u``, ``R``
         before the bond's change, ``u'``, ``R'`` after it, at the same load factor)."""
-        f = self.fh + lam * self.f
+        f = self._loads(lam)
         u1 = self._at(lam)
         r0 = (self.sp.internal(u0, *factors0) - f)[self.dofs]
         r1 = (self.sp.internal(u1, *self.factors()) - f)[self.dofs]
