@@ -350,6 +350,8 @@ def _fe_summary(solution, fe) -> dict:
         "order": fe.order,
         "refine": fe.refine,
         "n_dof": fe.info.n_dof,
+        "solver": fe.info.solver,
+        "iterations": fe.info.iterations,
         "seconds": fe.info.seconds.as_dict(),
         "rel_l2_difference": c.l2,
         "rel_max_difference": c.max,

@@ -141,3 +141,46 @@ def test_evaluate_at_many_points_in_chunks(monkeypatch):
     np.testing.assert_allclose(fe.stress(pts), fe.stress(pts[::-1])[::-1], rtol=1e-12)
     one = np.array([fe.evaluate(p[None])[0] for p in pts[:10]])
     np.testing.assert_allclose(one, whole[:10], rtol=1e-12, atol=1e-18)
+
+
+def _ring_problem():
+    mesh = dv.mesh.disc(1.0, 0.1, holes=[dv.mesh.Circle((0.0, 0.0), 0.5, name="bore")], seed=2)
+    near = [int(np.argmin(np.hypot(*(mesh.points - q).T))) for q in ((1, 0), (-1, 0), (0, 1))]
+    sup = [dv.Fix(np.array([near[0]]), y=0.0), dv.Fix(np.array([near[1]]), y=0.0)]
+    sup.append(dv.Fix(np.array([near[2]]), x=0.0))
+    return mesh, sup, [dv.Pressure("bore", 1.0)]
+
+
+@pytest.mark.parametrize("order", [1, 2])
+def test_values_at_nodes_read_the_nodal_dofs_as_point_location_does(order):
+    # the lattice nodes are FE vertices: their values come from the nodal dofs without
+    # point location; points a hair inside their elements go through point location
+    mesh, sup, ld = _ring_problem()
+    fe = fem.solve(mesh, 1e4, 0.3, sup, ld, order=order, refine=1)
+    np.testing.assert_array_equal(fe.evaluate(mesh.points), fe.u)
+    tri = mesh.triangles[:, 0]
+    centroid = mesh.points[mesh.triangles].mean(axis=1)
+    inside = mesh.points[tri] + 1e-9 * (centroid - mesh.points[tri])
+    scale = np.abs(fe.stress(mesh.points)).max()
+    diff = np.abs(fe.stress(inside) - fe.stress(mesh.points[tri])).max()
+    assert diff <= 1e-6 * scale  # the projected stress is continuous
+    both = np.r_[mesh.points[:5], inside[:5]]  # a mix of vertices and other points
+    np.testing.assert_allclose(
+        fe.stress(both)[5:], fe.stress(inside[:5]), rtol=0, atol=1e-12 * scale
+    )
+    np.testing.assert_array_equal(fe.stress(both)[:5], fe.stress(mesh.points[:5]))
+
+
+def test_large_fe_systems_are_solved_by_amg_cg_as_directly(monkeypatch):
+    mesh, sup, ld = _ring_problem()
+    direct = fem.solve(mesh, 1e4, 0.3, sup, ld, order=2)
+    assert direct.info.solver == "direct"
+    monkeypatch.setattr(fem, "FE_AMG_DOF", 10)
+    amg = fem.solve(mesh, 1e4, 0.3, sup, ld, order=2)
+    assert amg.info.solver == "amg-cg" and amg.info.iterations > 0
+    assert np.abs(amg.u - direct.u).max() <= 1e-9 * np.abs(direct.u).max()
+    # CG that does not reach its tolerance hands over to the direct solve
+    monkeypatch.setattr(fem, "FE_CG_RTOL", 1e-300)
+    again = fem.solve(mesh, 1e4, 0.3, sup, ld, order=2)
+    assert again.info.solver == "direct"
+    np.testing.assert_allclose(again.u, direct.u, rtol=0, atol=1e-12 * np.abs(direct.u).max())

@@ -186,3 +186,18 @@ def test_compression(out):
     assert max(r["held_equilibrium"] for r in d["biaxial"]["rows"]) < 1e-9
     assert d["brazilian"]["splitting_over_ft"] == pytest.approx(1.0, abs=0.15)
     assert d["brazilian"]["near_diameter"] > 0.5
+
+
+def test_patch_test_quick(out):
+    # a uniform hydrostatic stress on a ring: P1 and Voronoi-weighted springs pass it
+    # (their forces balance cell by cell), the default half springs on the surface do
+    # not on curved boundaries (validation/patch_test.py, docs/validation.md)
+    _run("patch_test", out)
+    d = json.loads((out / "patch_test.json").read_text())
+    rows = {(r["mesh"], r["model"]): r for r in d["rows"]}
+    for mesh in ("jittered", "cvt", "random"):
+        assert rows[(mesh, "P1")]["hydrostatic"] < 1e-9
+        assert rows[(mesh, "P1")]["lame"] < 0.01
+        assert rows[(mesh, "surface")]["hydrostatic"] > 0.02  # the surface layer's error
+    for mesh in ("jittered", "cvt"):
+        assert rows[(mesh, "voronoi")]["hydrostatic"] < 0.003

@@ -18,7 +18,7 @@ class FETimings(Record):
 
     mesh: float = 0.0  #: refinement, the FE mesh and its basis
     assembly: float = 0.0  #: stiffness, loads, supports
-    solve: float = 0.0  #: the direct solve (with iterative refinement)
+    solve: float = 0.0  #: the solve (direct with iterative refinement, or AMG-CG)
     total: float = 0.0
 
 
@@ -33,3 +33,5 @@ class FEInfo(Record):
     thickness: float
     load_resultant: np.ndarray  #: total applied force (fx, fy)
     seconds: FETimings
+    solver: str = "direct"  #: "direct" (SuperLU) or "amg-cg" (above ``FE_AMG_DOF`` dof)
+    iterations: int = 0  #: CG iterations, or the direct solve's refinement steps

@@ -356,7 +356,12 @@ SCHEMA: dict[str, F] = {
                 "bool", "solve the FE reference on the same triangles and compare", default=False
             ),
             "fe_order": F("int", "FE element order, 1 or 2", default=2),
-            "fe_refine": F("int", "uniform refinements of the FE reference", default=1),
+            "fe_refine": F(
+                "int",
+                "uniform refinements of the FE reference (0: P2 on the lattice's own triangles, "
+                "20x to 10,000x more accurate than the lattice at the examples' checks)",
+                default=0,
+            ),
             "probes": F("points", "points where displacement and stress are reported", default=[]),
             "part_stress": F(
                 "strings", "boundary parts whose nodal stress extremes are reported", default=[]
