@@ -185,3 +185,41 @@ def test_the_linear_lattice_is_p1_with_per_triangle_tensors(cls):
     lam_mu = Ct[:, 0, 1], 0.5 * (Ct[:, 0, 0] - Ct[:, 0, 1])
     np.testing.assert_allclose(Ct[:, 2, 2], 2 * lam_mu[1], rtol=0.02)  # isotropic
     np.testing.assert_allclose(Ct[:, 0, 2], 0.0, atol=1e-9 * Ct[:, 0, 0].max())
+
+
+@pytest.mark.parametrize("kind", ["lattice", "jittered", "cvt", "random"])
+@pytest.mark.parametrize("barycentric", [True, False])
+def test_coupling_matrices_in_closed_form_equal_the_fitted_half_side_gradients(kind, barycentric):
+    # M = r r^T / A - diag(r / l) (DV) and its RV counterpart against the least-squares
+    # fit dr B^T (B B^T)^-1 of the half sides' derivatives, and against finite
+    # differences of the half sides under a random strain of each triangle
+    from dvstatic.lattice import geometry
+    from dvstatic.lattice.kinematics import edge_frames, half_sides
+    from dvstatic.lattice.stabilise import _fitted_matrices, coupling_matrices
+
+    mesh = dv.mesh.rectangle(1, 1, 0.08, kind=kind, seed=4)
+    g = geometry.of(mesh)
+    bary = g.bary if barycentric else None
+    m = coupling_matrices(mesh, barycentric)
+    fit = _fitted_matrices(g.x_tri, bary)
+    assert np.abs(m - 0.5 * (fit + fit.transpose(0, 2, 1))).max() <= 1e-11 * np.abs(m).max()
+    eps = 1e-7 * np.random.default_rng(0).normal(size=(mesh.n_triangles, 2, 2))
+    eps = 0.5 * (eps + eps.transpose(0, 2, 1))
+    y = g.x_tri + np.einsum("mij,mvj->mvi", eps, g.x_tri)
+    dr = half_sides(y, bary)[0] - half_sides(g.x_tri, bary)[0]
+    dl = edge_frames(y)[1] - edge_frames(g.x_tri)[1]
+    pred = np.einsum("mkj,mj->mk", m, dl)
+    assert np.abs(pred - dr).max() <= 1e-5 * np.abs(dr).max()
+
+
+def test_closed_form_eigenvalues_of_symmetric_3x3_matrices():
+    from dvstatic.lattice.stabilise import eigvalsh3
+
+    rng = np.random.default_rng(1)
+    a = rng.normal(size=(2000, 3, 3))
+    a = a + a.transpose(0, 2, 1)
+    a[:5] = np.eye(3) * 2.0  # a triple eigenvalue
+    a[5:10] = np.diag([1.0, 1.0, -3.0])  # a double one
+    scale = np.abs(a).max(axis=(1, 2))[:, None]
+    assert np.abs(eigvalsh3(a) - np.linalg.eigvalsh(a)).max(axis=None) <= 1e-12 * scale.max()
+    assert np.all(np.abs(eigvalsh3(a) - np.linalg.eigvalsh(a)) <= 1e-12 * scale)

@@ -277,13 +277,16 @@ def test_updates_give_the_same_events_as_refactorising_under_held_loads():
     assert fast.stats.factorisations < slow.stats.factorisations / 10
 
 
-def test_with_held_loads_every_recorded_contact_status_is_consistent():
+@pytest.mark.parametrize("seed", [3, 5, 8])
+def test_with_held_loads_every_recorded_contact_status_is_consistent(seed):
     """A cracked plate loaded again under held pressures and growing tractions: in every
     recorded state no closed face pulls and no open cracked face overlaps (the load
-    factor is followed up from 0 through the factors where faces turn)."""
-    mesh = dv.mesh.rectangle(2.0, 1.0, 0.07, kind="cvt", seed=3)
+    factor is followed up from 0 through the factors where faces turn; a face exactly at
+    the turn where a segment starts takes the status its rate asks for: seed 3 has one,
+    and a round-off change of the stiffness left it closed and pulling before)."""
+    mesh = dv.mesh.rectangle(2.0, 1.0, 0.07, kind="cvt", seed=seed)
     model = dv.DV(mesh, E=3e4, nu=NU)
-    weibull = dv.Weibull(12, 0.0, seed=4)
+    weibull = dv.Weibull(12, 0.0, seed=seed + 1)
     cracked = dv.fracture(model, grips(mesh, 1e-3), None, ft=3.0, weibull=weibull, max_events=12)
     sup = [dv.Fix(at=(0, 0), x=0, y=0), dv.Fix(at=(2, 0), y=0)]
     held = [dv.Pressure("left", 2.0), dv.Pressure("right", 2.0), dv.Pressure("top", 1.0)]

@@ -12,7 +12,7 @@ import logging
 import numpy as np
 
 from ..lattice.damage import RESIDUAL
-from .contact import MAX_ITERATIONS, line_search
+from .contact import MAX_ITERATIONS, TOLERANCE, line_search
 
 log = logging.getLogger(__name__)
 
@@ -49,6 +49,7 @@ class EventSearch:
         lam, soft = 0.0, self.criterion.softening
         self._settle(lam)
         for _ in range(OUTER):
+            self._leave_consistently(lam)
             start = self._at(lam)
             crit = self._criterion(start)
             crit = crit._replace(factor=lam + crit.factor)
@@ -63,14 +64,7 @@ class EventSearch:
             nxt = lam + float(ahead[turns].min()) if turns.any() else np.inf
             if crit.factor <= nxt:
                 return crit
-            at = c[turns & (lam + ahead <= nxt * (1 + 1e-12))]
-            status = self.contact.closed.copy()
-            status[at] = ~status[at]
-            self.contact.set(status)
-            self.solver.touch(np.unique(self.bond_tris[at]))
-            if self.opts.max_rank == 0:
-                self.solver.rebase(*self.factors())
-            self._solve()
+            self._flip(c[turns & (lam + ahead <= nxt * (1 + 1e-12))])
             lam = nxt
             self._settle(lam)
         log.warning(
@@ -79,6 +73,38 @@ class EventSearch:
             OUTER,
         )
         return self._criterion()
+
+    def _leave_consistently(self, lam: float) -> None:
+        """Faces at the turn (elongation zero to :data:`.contact.TOLERANCE`) at factor
+        ``lam`` keep their status in the state there, but the status must also hold as
+        the factor grows: a closed face whose elongation rises opens, an open one whose
+        elongation falls closes (they carry no force at ``lam``, so the state there
+        stays). Flip them and solve again until none moves the wrong way (a few passes;
+        the status of the others changes the rates)."""
+        soft, c = self.criterion.softening, np.flatnonzero(self.contact.cracked)
+        for _ in range(MAX_ITERATIONS):
+            el, rate = soft(self._at(lam)), soft(self.x)
+            at_turn = np.abs(el[c]) <= TOLERANCE * (float(np.max(np.abs(el))) or 1.0)
+            tol = TOLERANCE * (float(np.max(np.abs(rate))) or 1.0)
+            closed = self.contact.closed[c]
+            wrong = at_turn & np.where(closed, rate[c] > tol, rate[c] < -tol)
+            if not wrong.any():
+                return
+            self._flip(c[wrong])
+        log.warning(
+            "fracture: faces at the turn kept flipping (%d passes); keeping the last status",
+            MAX_ITERATIONS,
+        )
+
+    def _flip(self, faces: np.ndarray) -> None:
+        """Turn the contact status of cracked ``faces`` and solve again."""
+        status = self.contact.closed.copy()
+        status[faces] = ~status[faces]
+        self.contact.set(status)
+        self.solver.touch(np.unique(self.bond_tris[faces]))
+        if self.opts.max_rank == 0:
+            self.solver.rebase(*self.factors())
+        self._solve()
 
     def _criterion(self, held=None):
         """The criterion's next event under ``held + lambda x`` (``held`` default: the
@@ -104,7 +130,7 @@ class EventSearch:
         far as it falls along the way; True if the status changed."""
         contact, soft = self.contact, self.criterion.softening
         z, newton, moved = self._at(lam), True, False
-        energy = self._energy(z, lam)
+        energy = None  # of z; only needed once the status changes (most events: never)
         for _ in range(MAX_ITERATIONS):
             status = contact.status(soft(z))
             if newton and np.array_equal(status, contact.closed):
@@ -120,6 +146,8 @@ class EventSearch:
             zn = self._at(lam)
             if np.array_equal(contact.status(soft(zn)), contact.closed):
                 return moved
+            if energy is None:
+                energy = self._energy(z, lam)
             e_new = self._energy(zn, lam)
             if e_new < energy:  # a full Newton step that lowers the energy
                 z, energy, newton = zn, e_new, True

@@ -90,8 +90,10 @@ class TriangleSplit:
     def forces(self, u: np.ndarray, w: np.ndarray, g: np.ndarray) -> np.ndarray:
         """Every triangle's share of its bonds' tensions, (M, 3), for displacement ``u``
         (2N,)."""
-        elong = np.matmul(self.b, u[self.dofs][:, :, None])  # (M, 3, 1)
-        return np.matmul(self.q(w, g), elong)[:, :, 0]
+        # q e = w e + g (m e): einsum on the tiny per-triangle products is 3-4x faster
+        # than batched matmul with q assembled (1.9e5 triangles: 10 against 35 ms)
+        elong = np.einsum("mkj,mj->mk", self.b, u[self.dofs])
+        return w * elong + g[:, None] * np.einsum("mkj,mj->mk", self.m, elong)
 
     def tension(self, u: np.ndarray, w: np.ndarray, g: np.ndarray, forces=None) -> np.ndarray:
         """Bond tensions (n_bonds,) of displacement ``u`` (2N,) (force units); ``forces``
@@ -126,7 +128,7 @@ class TriangleSplit:
         if weight is not None:
             f = f * weight[:, None]
             area = area * weight
-        sig = np.matmul(f[:, None, :], self.nn)[:, 0, :]  # (M, 4): sum_k f_k n_k (x) n_k
+        sig = np.einsum("mk,mkc->mc", f, self.nn)  # (M, 4): sum_k f_k n_k (x) n_k
         tn = self.tri_nodes
         nn = self.n_nodes
         acc = np.stack([np.bincount(tn, np.repeat(sig[:, c], 3), nn) for c in range(4)], 1)

@@ -36,6 +36,7 @@ from ..mesh import Mesh
 from . import assembly
 from . import geometry as _geometry
 from .kinematics import A_OF, O_OF, edge_frames, elongation_gradients, half_sides
+from .stabilise import flat_triangles, reference_matrices
 
 if TYPE_CHECKING:  # annotations only: scipy is imported where it is used
     import scipy.sparse as sp
@@ -228,10 +229,13 @@ class LatticeOperator:
         return t
 
     # ------------------------------------------------------------ matrices
-    def element_matrices(self, y: np.ndarray, sl: slice, tension=None) -> np.ndarray:
+    def element_matrices(
+        self, y: np.ndarray, sl: slice, tension=None, reference: bool = False
+    ) -> np.ndarray:
         """Triangle 6x6 tangent blocks for current vertex positions ``y`` (m, 3, 2) of
         triangles ``sl``; with ``tension`` (n_bonds,) the geometric (initial-stress) part
-        is added."""
+        is added; ``reference``: ``y`` is the reference configuration (the half sides'
+        gradients in closed form)."""
         g = self.geometry
         tri_bonds = self.mesh.topology.tri_bonds[sl]
         _, length, n = edge_frames(y)
@@ -239,7 +243,15 @@ class LatticeOperator:
         b = elongation_gradients(n)
         q = (g.tri_weight[sl] * self.spring[tri_bonds])[..., None] * b
         if self.has_coupling:
-            _, dr = half_sides(y, self._bary(sl), grad=True)
+            if reference:  # dr = M b in closed form (lattice.stabilise), but slivers
+                dr = np.matmul(reference_matrices(g, self.barycentric, sl), b)
+                flat = flat_triangles(g, sl)
+                if flat.size:
+                    dr[flat] = half_sides(
+                        y[flat], self._bary(sl)[flat] if self.barycentric else None, grad=True
+                    )[1]
+            else:
+                _, dr = half_sides(y, self._bary(sl), grad=True)
             q = q + self.coupling[sl, None, None] * dr
         ke = np.matmul(b.transpose(0, 2, 1), q)
         if tension is not None:
@@ -261,10 +273,10 @@ class LatticeOperator:
         data = np.zeros((pat.nnzb, 4))
         for sl in _chunks(self.mesh.n_triangles):
             if u is None:
-                y = self.geometry.x_tri[sl]
+                ke = self.element_matrices(self.geometry.x_tri[sl], sl, tension, reference=True)
             else:
-                y = self.deformed_triangles(u, strain, sl)
-            assembly.accumulate(pat, self.element_matrices(y, sl, tension), data, sl)
+                ke = self.element_matrices(self.deformed_triangles(u, strain, sl), sl, tension)
+            assembly.accumulate(pat, ke, data, sl)
         return assembly.to_bsr(pat, data)
 
     @cached_property
