@@ -279,8 +279,11 @@ def _fe_reference(sc, mesh, supports, loads, say, nonlinear: bool):
         print(f"note: {why}", file=sys.stderr)
         return None, why
     dof = _fe_dof(mesh, o["fe_order"], o["fe_refine"])
+    mesh_words = {0: "on the lattice's triangles", 1: "refined once"}.get(
+        o["fe_refine"], f"refined {o['fe_refine']} times"
+    )
     say(
-        f"FE reference (P{o['fe_order']}, {o['fe_refine']} refinement(s), {dof:,} dof, "
+        f"FE reference (P{o['fe_order']} {mesh_words}, {dof:,} dof, "
         f"roughly {max(1.0, 10.0 * (dof / 2.8e5) ** 1.2):.0f} s on 2 cores)"
     )
     try:
