@@ -129,7 +129,7 @@ def test_evaluate_at_many_points_in_chunks(monkeypatch):
     """scikit-fem's element finder maps every point into every candidate element of a
     call (15.6 GiB for 16,835 points on a fine reference): points go in chunks, with the
     same values as one by one."""
-    from dvstatic import fem as fem_mod
+    from dvstatic.fem import probes as fem_mod
 
     m = dv.mesh.rectangle(2.0, 1.0, 0.1, kind="jittered", seed=4)
     fe = dv.fem.solve(m, 1e5, 0.3, [dv.Fix("left")], [dv.Traction("right", (0.0, -1.0))])
@@ -175,12 +175,12 @@ def test_large_fe_systems_are_solved_by_amg_cg_as_directly(monkeypatch):
     mesh, sup, ld = _ring_problem()
     direct = fem.solve(mesh, 1e4, 0.3, sup, ld, order=2)
     assert direct.info.solver == "direct"
-    monkeypatch.setattr(fem, "FE_AMG_DOF", 10)
+    monkeypatch.setattr(fem.system, "FE_AMG_DOF", 10)
     amg = fem.solve(mesh, 1e4, 0.3, sup, ld, order=2)
     assert amg.info.solver == "amg-cg" and amg.info.iterations > 0
     assert np.abs(amg.u - direct.u).max() <= 1e-9 * np.abs(direct.u).max()
     # CG that does not reach its tolerance hands over to the direct solve
-    monkeypatch.setattr(fem, "FE_CG_RTOL", 1e-300)
+    monkeypatch.setattr(fem.system, "FE_CG_RTOL", 1e-300)
     again = fem.solve(mesh, 1e4, 0.3, sup, ld, order=2)
     assert again.info.solver == "direct"
     np.testing.assert_allclose(again.u, direct.u, rtol=0, atol=1e-12 * np.abs(direct.u).max())

@@ -30,9 +30,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._checks import check_int, check_positive
-from ..errors import InputError, SingularError
+from ..errors import InputError
 from ..lattice import VoronoiModel
-from ..linalg import AMGSolver, DirectSolver, SolveRecord
 from ..material import Elastic, lame_plane_stress
 from ..mesh import Mesh
 from ..problem import (
@@ -49,6 +48,8 @@ from ..problem import (
 from .compare import Comparison, compare
 from .info import FEInfo, FETimings
 from .mesh import FEMesh, build
+from .probes import FACET_CHUNK, probe_matrix
+from .system import solve_spd
 
 if TYPE_CHECKING:  # annotations only: scipy is imported where it is used
     import scipy.sparse as sp
@@ -108,7 +109,7 @@ class FESolution:
     def evaluate(self, points) -> np.ndarray:
         """Displacement at arbitrary points inside the mesh, shape (n, 2)."""
         p = _points(points)
-        v = _probes(self.basis, self.fe_mesh, p) @ self.x
+        v = probe_matrix(self.basis, self.fe_mesh, p) @ self.x
         n = len(p)
         return np.c_[v[:n], v[n:]]
 
@@ -140,7 +141,7 @@ class FESolution:
         """
         p = _points(points)
         sb, vals = self._stress_fields
-        probe = _probes(sb, self.fe_mesh, p)
+        probe = probe_matrix(sb, self.fe_mesh, p)
         sxx, syy, sxy = (probe @ v for v in vals[:3])
         return np.stack([np.stack([sxx, sxy], -1), np.stack([sxy, syy], -1)], -2)
 
@@ -149,7 +150,7 @@ class FESolution:
         3-D Lame constant), zero in plane stress."""
         p = _points(points)
         sb, vals = self._stress_fields
-        return _probes(sb, self.fe_mesh, p) @ vals[3]
+        return probe_matrix(sb, self.fe_mesh, p) @ vals[3]
 
 
 #: relative residual of the stress projections' CG solves (mass matrix, Jacobi)
@@ -183,114 +184,6 @@ def _points(points) -> np.ndarray:
     if p.ndim != 2 or p.shape[1] != 2:
         raise InputError(f"points must have shape (n, 2), got {p.shape}", "points")
     return p
-
-
-#: points per call of scikit-fem's element finder, which maps every point into every
-#: candidate element of the whole call (memory ~ points x candidates: 15.6 GiB for 16,835
-#: points in one call, 40 MB in chunks)
-FINDER_CHUNK = 256
-
-
-def _cells(fe: FEMesh, x: np.ndarray) -> np.ndarray:
-    """The element of every point (x: (2, n)), in chunks of :data:`FINDER_CHUNK`."""
-    finder = fe.linear.element_finder()
-    if x.shape[1] <= FINDER_CHUNK:
-        return _cells_chunk(fe, finder, x)
-    return np.concatenate(
-        [
-            _cells_chunk(fe, finder, x[:, i : i + FINDER_CHUNK])
-            for i in range(0, x.shape[1], FINDER_CHUNK)
-        ]
-    )
-
-
-def _cells_chunk(fe: FEMesh, finder, x: np.ndarray) -> np.ndarray:
-    """The element of every point (2, n); points on the boundary (where round-off can
-    put them just outside) are moved a hair towards the nearest element's centroid."""
-    try:
-        return finder(*x)
-    except ValueError:
-        pass
-    from scipy.spatial import cKDTree
-
-    m = fe.linear
-    centroids = m.p[:, m.t].mean(axis=1).T
-    _, near = cKDTree(centroids).query(x.T)
-    nudged = x + 1e-9 * (centroids[near].T - x)
-    try:
-        return finder(*nudged)
-    except ValueError:
-        raise InputError("a point lies outside the mesh", "points") from None
-
-
-def _reference_points(basis, x: np.ndarray, cells: np.ndarray) -> np.ndarray:
-    """Reference coordinates of points ``x`` (2, n) in their ``cells``, in chunks (see
-    :data:`FACET_CHUNK`), shape (2, n, 1). Where scikit-fem's Newton inversion of a
-    curved (quadratic) element fails (a point between the straight edge and the true
-    curve, outside the curved element), the chunk's points use the affine map of their
-    cell's corners instead (exact on straight elements; on a curved edge it errs by
-    the curve's sagitta over the element)."""
-    chunks = range(0, x.shape[1], FACET_CHUNK) if x.shape[1] else [0]
-    out = []
-    for i in chunks:
-        sl = slice(i, i + FACET_CHUNK)
-        try:
-            out.append(basis.mapping.invF(x[:, sl, None], tind=cells[sl]))
-        except Exception:  # noqa: BLE001 - scikit-fem's Newton raises a bare Exception
-            log.info(
-                "FE point location: affine reference coordinates for %d points", x[:, sl].shape[1]
-            )
-            out.append(_affine_reference(basis, x[:, sl], cells[sl]))
-    return np.concatenate(out, axis=1)
-
-
-def _affine_reference(basis, x: np.ndarray, cells: np.ndarray) -> np.ndarray:
-    """Reference coordinates (2, n, 1) of points in the triangles of their cells' first
-    three (corner) nodes."""
-    mesh = basis.mesh
-    corners = mesh.p[:, mesh.t[:3, cells]]  # (2, 3, n)
-    a, b, c = corners[:, 0], corners[:, 1], corners[:, 2]
-    d1, d2 = b - a, c - a
-    det = d1[0] * d2[1] - d1[1] * d2[0]
-    r = x - a
-    xi = (r[0] * d2[1] - r[1] * d2[0]) / det
-    eta = (d1[0] * r[1] - d1[1] * r[0]) / det
-    return np.stack([xi, eta])[..., None]
-
-
-def _probes(basis, fe: FEMesh, p: np.ndarray):
-    """The matrix that evaluates a field of ``basis`` at points ``p`` (n, 2) (scikit-fem's
-    ``probes``, with the cells found on the straight-sided mesh so that quadratic
-    geometry works too). Points that are mesh vertices (the lattice nodes, where
-    outputs are mostly asked for) read their nodal dofs: no point location."""
-    from scipy.sparse import coo_matrix
-    from scipy.spatial import cKDTree
-
-    comp = int(np.prod(basis._base_tensor_order))
-    n = len(p)
-    dist, vertex = cKDTree(fe.points).query(p)
-    at_vertex = dist == 0.0
-    rows_v = np.flatnonzero(at_vertex)
-    rows, cols, vals = [], [], []
-    for c in range(comp):
-        rows.append(c * n + rows_v)
-        cols.append(basis.nodal_dofs[c, vertex[rows_v]])
-        vals.append(np.ones(rows_v.size))
-    rest = np.flatnonzero(~at_vertex)
-    if rest.size:
-        x = np.ascontiguousarray(p[rest].T)
-        cells = _cells(fe, x)
-        pts = _reference_points(basis, x, cells)
-        phis = np.array(
-            [basis.elem.gbasis(basis.mapping, pts, k, tind=cells)[0] for k in range(basis.Nbfun)]
-        ).reshape(basis.Nbfun, comp, rest.size)
-        dofs = basis.element_dofs[:, cells].reshape(-1)  # a vector function has one component
-        for c in range(comp):
-            rows.append(np.tile(c * n + rest, basis.Nbfun))
-            cols.append(dofs)
-            vals.append(phis[:, c].reshape(-1))
-    ij = (np.concatenate(rows), np.concatenate(cols))
-    return coo_matrix((np.concatenate(vals), ij), shape=(comp * n, basis.N)).tocsr()
 
 
 def solve(
@@ -368,7 +261,7 @@ def solve(
     comp[basis.nodal_dofs[1]] = 1
     if basis.facet_dofs.size:
         comp[basis.facet_dofs[1]] = 1
-    x[free], solver, its = _solve_spd(A, b, basis.doflocs[:, free].T, comp[free])
+    x[free], solver, its = solve_spd(A, b, basis.doflocs[:, free].T, comp[free])
     t3 = time.perf_counter()
     nodal = basis.nodal_dofs
     u = np.c_[x[nodal[0, : mesh.n_points]], x[nodal[1, : mesh.n_points]]]
@@ -485,10 +378,6 @@ def _facets_of(mesh: Mesh, fe: FEMesh, edges: np.ndarray) -> np.ndarray:
     chosen[idx] = True
     bf = fe.skfem.boundary_facets()
     return bf[chosen[fe.parent[fe.facet_index(bf)]]]
-
-
-#: boundary facets per scikit-fem FacetBasis (see _load_vector)
-FACET_CHUNK = 256
 
 
 def _load_vector(mesh: Mesh, fe: FEMesh, elem, basis, loads, t: float = 1.0) -> np.ndarray:
@@ -624,79 +513,3 @@ def _values(mesh: Mesh, basis, c, dofs, edge, s) -> np.ndarray:
     full[c.nodes] = c.value
     a, b = mesh.boundary_edges[edge, 0], mesh.boundary_edges[edge, 1]
     return (1.0 - s) * full[a] + s * full[b]
-
-
-#: FE systems with more unknowns than this are solved by AMG-CG (rigid-body modes),
-#: smaller ones directly (P2, plate_with_hole refined once, 2.8e5 dof: AMG-CG 3.9 s and
-#: no memory beyond the assembly's, SuperLU 7.5 s and 1.1 GB more; at 5.7e4 dof
-#: SuperLU 0.7 s, AMG-CG 0.9 s)
-FE_AMG_DOF = 100_000
-#: relative residual of the FE reference's AMG-CG solve
-FE_CG_RTOL = 1e-11
-
-
-def _solve_spd(A: sp.spmatrix, b: np.ndarray, locs: np.ndarray, comp: np.ndarray):
-    """Solve the condensed FE system, returning ``(x, solver, iterations)``: AMG-CG
-    above :data:`FE_AMG_DOF` unknowns (the direct solve if it does not converge), else
-    SuperLU in symmetric mode with its minimum-degree ordering on ``A^T + A`` (on the
-    beam example's P2 systems half the fill and half the time of a nested dissection of
-    the dof locations: 8.2e6 against 1.8e7 factor entries at 5.7e4 dof)."""
-    import scipy.sparse as sp
-
-    A = sp.csr_matrix(A)
-    if A.shape[0] > FE_AMG_DOF:
-        x, its = _solve_amg(A, b, locs, comp)
-        if x is not None:
-            return x, "amg-cg", its
-    lu = DirectSolver(A)
-    if lu.negative_pivots:
-        raise SingularError("the FE stiffness is not positive definite: check the supports")
-    x, info = lu.solve(b)
-    # a slender body is ill-conditioned, not singular: judge the solve by its backward
-    # error, after one step of iterative refinement (a 10 x 0.5 strip at h = 0.05, P2:
-    # relative residual 1.9e-8 before it)
-    for _ in range(2):
-        if _good(x, info):
-            return x, "direct", info.iterations
-        dx, _ = lu.solve(b - A @ x)
-        x = x + dx
-        r = b - A @ x
-        nb = float(np.linalg.norm(b)) or 1.0
-        nr = float(np.linalg.norm(r))
-        info = SolveRecord(0, [nr / nb], nr / (_norm1(A) * float(np.linalg.norm(x)) + nb))
-    if not _good(x, info):
-        raise SingularError(
-            f"FE solve failed (relative residual {info.residuals[-1]:.2e}, backward error "
-            f"{info.backward_error:.2e}): the FE system is singular"
-        )
-    return x, "direct", info.iterations
-
-
-def _solve_amg(A: sp.spmatrix, b: np.ndarray, locs: np.ndarray, comp: np.ndarray):
-    """AMG-CG with the three rigid-body modes of the dofs at ``locs`` (n, 2) with
-    components ``comp`` (n,): the solution (None if CG does not reach
-    :data:`FE_CG_RTOL`, e.g. for a nearly incompressible material, so that the caller
-    solves directly) and the iterations."""
-    B = np.zeros((A.shape[0], 3))
-    x_, y_ = comp == 0, comp == 1
-    B[x_, 0], B[y_, 1] = 1.0, 1.0
-    B[x_, 2], B[y_, 2] = -locs[x_, 1], locs[y_, 0]
-    amg = AMGSolver(A, B)
-    x, info = amg.solve(b, rtol=FE_CG_RTOL, maxiter=1000)
-    if info.residuals[-1] <= FE_CG_RTOL and np.all(np.isfinite(x)):
-        log.info("FE AMG-CG: %d iterations", info.iterations)
-        return x, info.iterations
-    log.info("FE AMG-CG stalled at %.1e: solving directly", info.residuals[-1])
-    return None, info.iterations
-
-
-def _good(x: np.ndarray, info: SolveRecord) -> bool:
-    """A finite solution with a small residual, or a backward error at rounding level."""
-    if not np.all(np.isfinite(x)):
-        return False
-    backward = np.inf if np.isnan(info.backward_error) else info.backward_error
-    return info.residuals[-1] <= 1e-8 or backward <= 1e-13
-
-
-def _norm1(A) -> float:
-    return float(abs(A).sum(axis=0).max())
