@@ -69,13 +69,21 @@ class VoronoiModel:
         paper's closed form under affine strain (eqs. 9-10 / 19-20), no stabilisation.
         Or given :class:`~dvstatic.lattice.calibration.MicroParameters` (used as they
         are; a sequence of them with ``materials``: the default material's first).
-    bonds : {"surface", "uniform", "voronoi"}
-        Normal-spring stiffness of each bond: ``"surface"`` (default) ``k_n``, and
+    bonds : {"surface", "fabric", "uniform", "voronoi"}
+        Normal-spring stiffness of each bond. ``"surface"`` (default): ``k_n``, and
         ``k_n / 2`` on boundary bonds (one triangle), which carry half a cell (as on the
         surface of a regular lattice) and would otherwise make a stiff surface layer;
-        ``"uniform"``: the paper's ``k_n`` everywhere; ``"voronoi"``: ``k_n w_e`` with
-        ``w_e = sqrt(3) r_e / l_e`` (its own Voronoi side). The Voronoi coupling stays
-        per triangle, so the stiffness stays symmetric.
+        ``"fabric"``: the surface springs times ``1 - 4 n.D.n``, ``D`` the deviator of
+        the springs' fabric tensor averaged over
+        :data:`~dvstatic.lattice.weights.FABRIC_RINGS` rings of neighbours, which takes
+        the local anisotropy of the cells (a graded mesh's stretched cells, the
+        patches of a point set) out of the lattice to first order
+        (:func:`~dvstatic.lattice.weights.fabric_factors`; calibrated on samples
+        corrected alike; better on curved boundaries and on CVT and random points,
+        worse in some cases: docs/validation.md); ``"uniform"``: the paper's ``k_n``
+        everywhere; ``"voronoi"``: ``k_n w_e`` with ``w_e = sqrt(3) r_e / l_e`` (its
+        own Voronoi side). The Voronoi coupling stays per triangle, so the stiffness
+        stays symmetric.
         The paper's model is ``calibration="paper", bonds="uniform"``.
     plane : {"stress", "strain"}
         Plane stress, or plane strain: the lattice is calibrated with the effective

@@ -11,6 +11,7 @@ from .partition import (
     owned_bonds,
     owned_loads,
     owned_triangles,
+    patch_bond_weights,
     patch_memory,
     rcb_partition,
 )
@@ -25,5 +26,6 @@ __all__ = [
     "owned_triangles",
     "micro_parameters",
     "owned_loads",
+    "patch_bond_weights",
     "patch_memory",
 ]

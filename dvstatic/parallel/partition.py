@@ -54,6 +54,7 @@ __all__ = [
     "owned_triangles",
     "micro_parameters",
     "owned_loads",
+    "patch_bond_weights",
     "patch_memory",
 ]
 
@@ -211,6 +212,21 @@ def micro_parameters(model, lay: Layout, allreduce) -> tuple:
     sums = calibration.moment_sums(model.kind, geom, w, own_b, owned_triangles(lay))
     mom = calibration.moments_from_sums(allreduce(sums), model.mesh.area)
     return tuple(calibration.paper_from_moments(model.kind, mom, E2, nu2) for E2, nu2 in constants)
+
+
+def patch_bond_weights(model, lay: Layout) -> np.ndarray:
+    """The model's relative spring weights on the patch's bonds, shape (n_patch_bonds,):
+    computed on the whole (replicated) mesh, since a scheme may read the mesh beyond
+    the patch's two rings (``"fabric"`` averages over
+    :data:`~dvstatic.lattice.weights.FABRIC_RINGS`)."""
+    w = bond_weights(model.bonds, model.mesh)
+    n = model.mesh.n_points
+    gb = np.sort(model.mesh.topology.bonds, axis=1).astype(np.int64)
+    key = gb[:, 0] * n + gb[:, 1]
+    order = np.argsort(key)
+    pb = np.sort(lay.local_nodes[lay.patch.topology.bonds], axis=1).astype(np.int64)
+    pos = np.searchsorted(key, pb[:, 0] * n + pb[:, 1], sorter=order)
+    return w[order[pos]]
 
 
 def owned_loads(mesh: Mesh, loads, lay: Layout, thickness: float = 1.0) -> np.ndarray:

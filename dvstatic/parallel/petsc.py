@@ -24,7 +24,15 @@ from ..problem import FollowerPressures, check_restrained, constraints
 from ..problem.follower import split_followers
 from ..solvers.newton import State, absolute_floor, solve_nonlinear
 from ..solvers.result import LinearSolve, ParallelInfo, Solution, SolveInfo, StabilityCheck, Timings
-from .partition import Layout, layout, micro_parameters, owned_bonds, owned_loads, patch_memory
+from .partition import (
+    Layout,
+    layout,
+    micro_parameters,
+    owned_bonds,
+    owned_loads,
+    patch_bond_weights,
+    patch_memory,
+)
 
 __all__ = ["DEFAULT_OPTIONS", "PREFIX", "solve"]
 
@@ -281,6 +289,7 @@ def _prepare(PETSc, comm, model, supports, loads, opts, seconds: dict) -> _Setup
         thickness=model.thickness,
         materials={k: (m.E, m.nu) for k, m in model.materials.items()},
     )
+    object.__setattr__(pm, "bond_weight", patch_bond_weights(model, lay))  # cached
     cnew = 2 * lay.new_of[dofs // 2] + dofs % 2
     order = np.argsort(cnew)
     cdofs, cvals = cnew[order], values[order]

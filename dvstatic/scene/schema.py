@@ -182,10 +182,11 @@ SCHEMA: dict[str, F] = {
             "bonds": F(
                 "string",
                 "normal-spring stiffness: surface (k_n, half on boundary bonds: no stiff "
-                "surface layer), uniform (the paper's k_n) or voronoi (k_n sqrt(3) r/l). "
+                "surface layer), fabric (surface springs with the local anisotropy of the "
+                "cells taken out), uniform (the paper's k_n) or voronoi (k_n sqrt(3) r/l). "
                 "The paper's model: calibration = paper, bonds = uniform",
                 default="surface",
-                choices=("surface", "uniform", "voronoi"),
+                choices=("surface", "fabric", "uniform", "voronoi"),
             ),
         },
     ),

@@ -85,8 +85,14 @@ _PROBES = (
     np.array([[0.0, 1.0], [1.0, 0.0]]) / np.sqrt(2.0),
 )
 
-#: interior bonds of a periodic sample are full bonds: "surface" is "uniform" there
-_SAMPLE_BONDS = {"surface": "uniform", "uniform": "uniform", "voronoi": "voronoi"}
+#: interior bonds of a periodic sample are full bonds: "surface" is "uniform" there (a
+#: "fabric" sample is corrected for its own fabric, as the mesh is)
+_SAMPLE_BONDS = {
+    "surface": "uniform",
+    "uniform": "uniform",
+    "voronoi": "voronoi",
+    "fabric": "fabric",
+}
 
 
 def interior_spread(mesh: Mesh) -> float:
@@ -241,7 +247,7 @@ def sample_for(mesh: Mesh, n_points: int = REV_POINTS, seed: int = 0, spread=Non
 
 
 def relaxed_moduli(
-    kind: str, rev: Mesh, nu_m: float, bonds: str = "surface", stabilise: bool = True
+    kind: str, rev: Mesh, nu_m: float, bonds: str = "uniform", stabilise: bool = True
 ) -> dict:
     """Equilibrium (relaxed) moduli of a periodic sample for ``k_n = 1`` and ``nu_m``.
 
@@ -255,7 +261,8 @@ def relaxed_moduli(
     rev : Mesh
         A periodic sample.
     nu_m : float
-    bonds : {"surface", "uniform", "voronoi"}
+    bonds : {"uniform", "surface", "fabric", "voronoi"}
+        The mesh's scheme ("surface" is "uniform" on a sample).
     stabilise : bool
         Clip the coupling per triangle (:mod:`dvstatic.lattice.stabilise`).
 
@@ -324,7 +331,8 @@ def relaxed(
     mesh : Mesh
     E, nu : float
         In-plane constants to match (plane strain: the effective ones).
-    bonds : {"surface", "uniform", "voronoi"}
+    bonds : {"surface", "fabric", "uniform", "voronoi"}
+        The model's bond scheme.
     rev_points, seed : int
         Size and seed of a sample made on the fly.
     spread : float, optional
@@ -385,10 +393,10 @@ def moduli_curve(
     key : tuple
         Identifies the curve.
     """
-    if _SAMPLE_BONDS[bonds] == "uniform" and mesh.sampling is not None:
-        c = table.curve(kind, mesh.sampling)
+    if _SAMPLE_BONDS[bonds] in table.WEIGHTINGS and mesh.sampling is not None:
+        c = table.curve(kind, mesh.sampling, _SAMPLE_BONDS[bonds])
         if c is not None:
-            return c, (kind, "table", mesh.sampling.key)
+            return c, (kind, "table", _SAMPLE_BONDS[bonds], mesh.sampling.key)
     rev, source, skey = sample_for(mesh, rev_points, seed, spread)
     key = (kind, _SAMPLE_BONDS[bonds], skey)
     c = _CURVES.get(key)

@@ -20,9 +20,12 @@ from ..._cache import Bounded
 from ...mesh.recipe import Sampling
 from ..stabilise import MARGIN
 
-__all__ = ["TABLE_FILE", "load", "curve", "TableCurve"]
+__all__ = ["TABLE_FILE", "WEIGHTINGS", "load", "curve", "TableCurve"]
 
 TABLE_FILE = "relaxed_table.json"
+#: spring weightings of the samples in the table: uniform springs (the "surface" and
+#: "uniform" schemes) and fabric-corrected ones (the "fabric" scheme; point-set recipes)
+WEIGHTINGS = ("uniform", "fabric")
 #: interpolated curves by (model, recipe)
 _CURVES = Bounded("calibration table curves", maxsize=64)
 
@@ -80,25 +83,33 @@ class TableCurve:
         }
 
 
-def curve(kind: str, sampling: Sampling) -> TableCurve | None:
-    """The tabulated curve for ``kind`` ("DV" or "RV") and a generator recipe, or None
-    when the recipe is not in the table (perturbed meshes, other CVT iterations,
-    jitter outside the tabulated range)."""
-    if sampling.perturbations:
+def curve(kind: str, sampling: Sampling, weighting: str = "uniform") -> TableCurve | None:
+    """The tabulated curve for ``kind`` ("DV" or "RV"), a generator recipe and a spring
+    weighting (one of :data:`WEIGHTINGS`), or None when it is not in the table
+    (perturbed meshes, other CVT iterations, jitter outside the tabulated range, fabric
+    corrections of lattice recipes)."""
+    if sampling.perturbations or weighting not in WEIGHTINGS:
         return None
-    key = (kind, sampling.key)
+    key = (kind, weighting, sampling.key)
     if key not in _CURVES:
-        _CURVES.put(key, _curve(kind, sampling.kind, sampling.jitter, sampling.iterations))
+        c = _curve(kind, weighting, sampling.kind, sampling.jitter, sampling.iterations)
+        _CURVES.put(key, c)
     return _CURVES.get(key)
 
 
-def _curve(kind: str, sampling_kind: str, jitter: float, iterations: int) -> TableCurve | None:
+def _curve(
+    kind: str, weighting: str, sampling_kind: str, jitter: float, iterations: int
+) -> TableCurve | None:
     data = load()
     if data is None or kind not in data["curves"]:
         return None
     curves = data["curves"][kind]
+    if weighting != "uniform":
+        curves = curves.get(weighting, {})
     nu_m = np.asarray(data["nu_m"], dtype=float)
     what = str(Sampling(sampling_kind, jitter, iterations))
+    if weighting != "uniform":
+        what += f", {weighting}-corrected springs"
     if sampling_kind == "cvt" and iterations != data["cvt_iterations"]:
         return None
     if sampling_kind in ("lattice", "random", "cvt"):

@@ -1,0 +1,104 @@
+"""The fabric-corrected springs (``bonds="fabric"``, dvstatic.lattice.weights)."""
+
+import numpy as np
+import pytest
+
+import dvstatic as dv
+from dvstatic import parallel as distributed
+from dvstatic.lattice import geometry
+from dvstatic.lattice.weights import FABRIC_RINGS, fabric_factors, surface_weights
+
+
+def _fabric_deviator(mesh, w) -> np.ndarray:
+    """Deviator [(a_xx - a_yy) / 2, a_xy] of the whole mesh's spring fabric."""
+    g = geometry.of(mesh)
+    tb = mesh.topology.tri_bonds
+    ww = (g.tri_weight * w[tb] * g.tri_l**2).ravel()
+    d = g.direction[tb].reshape(-1, 2)
+    a = np.einsum("e,ei,ej->ij", ww, d, d) / ww.sum()
+    return np.array([0.5 * (a[0, 0] - a[1, 1]), a[0, 1]])
+
+
+def _regular_lattice(n: int = 24) -> dv.Mesh:
+    from scipy.spatial import Delaunay
+
+    i, j = np.meshgrid(np.arange(n), np.arange(n))
+    p = np.c_[(i + 0.5 * (j % 2)).ravel(), (np.sqrt(3) / 2 * j).ravel()]
+    tri = Delaunay(p).simplices
+    x = p[tri]
+    e1, e2 = x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]
+    area = 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
+    return dv.Mesh(p, tri[area > 1e-9])
+
+
+def test_regular_lattice_is_left_alone():
+    mesh = _regular_lattice()
+    f = fabric_factors(mesh, surface_weights(mesh))
+    assert np.abs(f - 1).max() < 1e-12
+
+
+@pytest.mark.parametrize("stretch", [1.1, 1.25])
+def test_a_stretched_lattice_is_made_isotropic_to_first_order(stretch):
+    """A lattice stretched along x has fabric e cos 2t; the corrected springs' fabric
+    is isotropic up to O(e^2)."""
+    base = dv.mesh.rectangle(2.0, 1.0, 0.08, kind="jittered", jitter=0.1, seed=2)
+    mesh = dv.Mesh(base.points * [stretch, 1.0], base.triangles)
+    w = surface_weights(mesh)
+    before = np.abs(_fabric_deviator(mesh, w)).max()
+    after = np.abs(_fabric_deviator(mesh, w * fabric_factors(mesh, w))).max()
+    assert before > 0.02 * (stretch - 1) / 0.1
+    assert after < 4 * before**2 + 2e-3
+
+
+def test_factors_average_over_the_stated_rings():
+    """A node further than FABRIC_RINGS + 1 rings from a local anisotropy is not
+    affected by it."""
+    base = dv.mesh.rectangle(4.0, 1.0, 0.1, kind="jittered", jitter=0.1, seed=3)
+    p = base.points.copy()
+    p[:, 0] += 0.3 * np.minimum(p[:, 0], 0.5)  # stretch a strip at the left edge by 1.3
+    mesh = dv.Mesh(p, base.triangles)
+    f0 = fabric_factors(base, surface_weights(base))
+    f1 = fabric_factors(mesh, surface_weights(mesh))
+    mid = mesh.points[mesh.topology.bonds].mean(axis=1)[:, 0]
+    far = mid > 0.65 + 0.11 * (FABRIC_RINGS + 2)
+    assert np.abs(f1 - f0)[far].max() < 1e-12
+    assert np.abs(f1 - f0)[mid < 0.5].max() > 0.05
+
+
+@pytest.mark.parametrize("cls", [dv.DV, dv.RV])
+def test_patch_weights_are_the_global_ones(cls):
+    """The distributed engine's patches take their springs from the whole mesh: the
+    fabric reads FABRIC_RINGS rings, further than a patch's two."""
+    mesh = dv.mesh.rectangle(1.0, 1.0, 0.05, kind="cvt", seed=4)
+    model = cls(mesh, 1e5, 0.3, bonds="fabric", calibration="paper")
+    K = model.stiffness()
+    for rank in range(3):
+        lay = distributed.layout(mesh, rank, 3)
+        pm = cls(lay.patch, 1e5, 0.3, calibration=model.micro, bonds="fabric")
+        object.__setattr__(pm, "bond_weight", distributed.patch_bond_weights(model, lay))
+        gd = np.stack([2 * lay.local_nodes, 2 * lay.local_nodes + 1], axis=1).reshape(-1)
+        n2 = 2 * lay.n_owned
+        assert abs(pm.stiffness()[:n2] - K[gd[:n2]][:, gd]).max() < 1e-9 * abs(K).max()
+
+
+def test_fabric_is_a_scene_choice_and_unknown_schemes_are_refused():
+    mesh = dv.mesh.rectangle(1.0, 0.5, 0.1, kind="cvt", seed=1)
+    assert dv.DV(mesh, 1e4, 0.3, bonds="fabric", calibration="paper").bonds == "fabric"
+    with pytest.raises(ValueError, match="bonds"):
+        dv.DV(mesh, 1e4, 0.3, bonds="fabrik")
+
+
+def test_point_sets_read_their_fabric_curves_from_the_table():
+    """CVT and random points with bonds="fabric" are calibrated from the table (no
+    sample), and the table agrees with a fresh fabric-corrected sample."""
+    from dvstatic.lattice.calibration import relaxed_moduli
+    from dvstatic.mesh import periodic_sample
+
+    mesh = dv.mesh.rectangle(1.0, 0.5, 0.05, kind="cvt", seed=1)
+    model = dv.DV(mesh, 1e4, 0.3, bonds="fabric")
+    assert model.micro.details["source"] == "table"
+    assert "fabric" in model.micro.details["sample"]
+    rev = periodic_sample(mesh.sampling, 4000, 7)
+    m = relaxed_moduli("DV", rev, model.micro.nu_m, bonds="fabric")
+    assert m["nu"] == pytest.approx(0.3, abs=0.01)
+    assert m["E"] * model.micro.k_n == pytest.approx(1e4, rel=0.02)
