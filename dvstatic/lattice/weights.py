@@ -2,17 +2,12 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
 from .._checks import check_choice
 from ..mesh import Mesh
 from . import geometry as _geometry
 from .geometry import Geometry
-
-if TYPE_CHECKING:  # annotations only: scipy is imported where it is used
-    import scipy.sparse as sp
 
 __all__ = [
     "BONDS",
@@ -45,12 +40,6 @@ def surface_weights(mesh: Mesh) -> np.ndarray:
     return 0.5 * mesh.topology.n_tris_per_bond.astype(float)
 
 
-def _ring_sum(adj: sp.csr_matrix, x: np.ndarray, rings: int) -> np.ndarray:
-    for _ in range(rings):
-        x = adj @ x
-    return x
-
-
 def fabric_factors(mesh: Mesh, weights: np.ndarray, rings: int = FABRIC_RINGS) -> np.ndarray:
     """Factors ``1 - 4 n.D.n`` (shape (n_bonds,)) that take the local anisotropy out
     of the springs' fabric.
@@ -73,8 +62,6 @@ def fabric_factors(mesh: Mesh, weights: np.ndarray, rings: int = FABRIC_RINGS) -
     rings : int
         Averaging scale, in rings of neighbours.
     """
-    import scipy.sparse as sp
-
     g = _geometry.of(mesh)
     b = mesh.topology.bonds
     n = mesh.n_points
@@ -90,9 +77,9 @@ def fabric_factors(mesh: Mesh, weights: np.ndarray, rings: int = FABRIC_RINGS) -
     node = np.zeros((n, 4))
     for c in range(4):
         node[:, c] = np.bincount(mesh.triangles.ravel(), np.repeat(tri[:, c], 3), n)
-    adj = sp.coo_matrix((np.ones(len(b)), (b[:, 0], b[:, 1])), shape=(n, n))
-    adj = (adj + adj.T + sp.identity(n)).tocsr()
-    node = _ring_sum(adj, node, rings)
+    step = mesh.topology.ring_step(n)
+    for _ in range(rings):
+        node = step @ node
     a = node[:, :3] / np.maximum(node[:, 3:], np.finfo(float).tiny)
     a = 0.5 * (a[b[:, 0]] + a[b[:, 1]])
     half = 0.5 * (a[:, 0] - a[:, 2])  # the deviator is [[half, a01], [a01, -half]]

@@ -46,6 +46,15 @@ class Topology:
         """Number of triangles (1 or 2) of every bond, shape (n_bonds,)."""
         return 1 + (self.bond_tris[:, 1] >= 0)
 
+    def ring_step(self, n_points: int):
+        """Node adjacency with the diagonal, CSR (n_points, n_points) of ones: one
+        product sums every node's values over itself and its neighbours (one ring)."""
+        import scipy.sparse as sp
+
+        b = self.bonds
+        a = sp.coo_matrix((np.ones(len(b)), (b[:, 0], b[:, 1])), shape=(n_points, n_points))
+        return (a + a.T + sp.identity(n_points)).tocsr()
+
 
 def build_topology(tri: np.ndarray, n: int, images: np.ndarray | None) -> Topology:
     """Bonds, triangle-bond incidence and boundary of a (periodic) triangulation.

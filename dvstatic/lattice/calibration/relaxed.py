@@ -148,15 +148,12 @@ MIXED_SPREAD = 0.15
 def spread_field(mesh: Mesh) -> np.ndarray:
     """The local spread around every node, shape (N,): the rms deviation from 1 of the
     relative lengths (as in :func:`local_spread`) of the bonds within two rings."""
-    import scipy.sparse as sp
-
     b = mesh.topology.bonds
     n = mesh.n_points
     count = np.bincount(b[:, 0], None, n) + np.bincount(b[:, 1], None, n)
     dev2 = (relative_lengths(mesh) - 1.0) ** 2
     node = (np.bincount(b[:, 0], dev2, n) + np.bincount(b[:, 1], dev2, n)) / np.maximum(count, 1)
-    a = sp.coo_matrix((np.ones(len(b)), (b[:, 0], b[:, 1])), (n, n))
-    step = (a + a.T + sp.identity(n)).tocsr()
+    step = mesh.topology.ring_step(n)
     deg = np.asarray(step.sum(axis=1)).ravel()
     for _ in range(2):
         node = (step @ node) / deg
