@@ -7,6 +7,7 @@ import pytest
 
 import dvstatic as dv
 from dvstatic.crack import EQUILIBRIUM_TOL, ucs
+from dvstatic.crack.criteria import MODES
 from dvstatic.lattice.damage import split
 from dvstatic.linalg import ConstrainedSystem
 from dvstatic.problem import constraints, load_vector
@@ -79,12 +80,111 @@ def test_the_tension_cut_off_governs_in_tension():
     assert res.events[0].load_factor == pytest.approx(stress.events[0].load_factor, rel=1e-12)
 
 
-def test_a_crushed_face_loses_its_bond_at_once_and_modes_are_counted():
-    res = compress(prism(), max_events=5, gf=0.05)
-    assert res.events[0].mode != "tension" and res.events[0].broken
+def test_a_crushed_face_loses_its_bond_at_once_without_gf_shear_and_modes_are_counted():
+    for kw in (dict(gf=0.05, gf_shear=0.0), dict()):  # gf_shear 0, and brittle without gf
+        res = compress(prism(), max_events=5, **kw)
+        assert res.events[0].mode != "tension" and res.events[0].broken
     summary = res.to_dict()
     assert sum(summary["modes"].values()) == len(res.events)
     assert set(summary["modes"]) == {"tension", "shear", "crushing"}
+
+
+# ------------------------------------------------------------------ gf_shear
+def test_gf_shear_softens_a_face_failed_in_shear_in_teeth_of_its_own_mode():
+    """With gf the first (crushing) face softens instead of breaking: its teeth keep
+    its mode, it is not a tension crack that could close, and its bond state goes on."""
+    res = compress(prism(), max_events=150, gf=1e-3)
+    first = res.events[0]
+    assert first.mode in ("crushing", "shear") and not first.broken
+    assert 0 < first.spring_lost < 0.5
+    by_bond = {}
+    for ev in res.events:
+        by_bond.setdefault(ev.bond, []).append(ev)
+    softened = [evs for evs in by_bond.values() if evs[0].mode != "tension" and len(evs) >= 3]
+    assert softened
+    state = res.bond_state
+    for evs in softened:
+        assert [ev.tooth for ev in evs] == list(range(len(evs)))
+        assert {ev.mode for ev in evs} == {evs[0].mode}
+        assert not state["cracked"][evs[0].bond]
+        assert state["mode"][evs[0].bond] == MODES.index(evs[0].mode)
+
+
+def test_the_default_gf_shear_is_ten_times_gf():
+    a = compress(prism(), max_events=20, gf=1e-3)
+    b = compress(prism(), max_events=20, gf=1e-3, gf_shear=1e-2)
+    assert [(e.bond, e.tooth) for e in a.events] == [(e.bond, e.tooth) for e in b.events]
+    c = compress(prism(), max_events=20, gf=1e-3, gf_shear=3e-2)
+    assert [(e.bond, e.tooth) for e in a.events] != [(e.bond, e.tooth) for e in c.events]
+
+
+def test_a_sheared_face_teeth_release_gf_shear_of_a_crack_band_one_face_wide():
+    """The teeth of a face failed in shear follow the continuum's crack band: with
+    ``m_0`` the face's Coulomb measure of its trial stress (the continuum law of its
+    triangles' strain) as it fails and ``W`` the elastic energy of its share of the body
+    ``sigma : eps l r t / 4``, ``sum_i (d_i - d_i+1) (m_i / m_0)^2 W = (pi / 4) gf_shear
+    t r`` (computed here from the recorded state, independently of the loop)."""
+    from dvstatic.crack.sla import BUFFON
+    from dvstatic.stress.virial import triangle_strains, triangle_stress
+
+    model = prism()
+    gfs = 1e-2
+    res = compress(model, max_events=1, gf=1e-3, gf_shear=gfs)
+    e = res.events[0].bond
+    u = res.solution(0).u
+    tris = np.flatnonzero(np.any(model.mesh.topology.tri_bonds == e, axis=1))
+    area = model.geometry.tri_area[tris]
+    sig = (triangle_stress(model, u)[tris] * area[:, None, None]).sum(0) / area.sum()
+    eps = triangle_strains(model.mesh, u)[tris]
+    density = (
+        np.einsum(
+            "m,mij,mij->m",
+            area,
+            triangle_stress(model, u)[tris],
+            np.stack(
+                [np.stack([eps[:, 0], eps[:, 2]], -1), np.stack([eps[:, 2], eps[:, 1]], -1)], -2
+            ),
+        ).sum()
+        / area.sum()
+    )
+    g = model.geometry
+    n = g.direction[e]
+    t = np.array([-n[1], n[0]])
+    sn, tau = n @ sig @ n, t @ sig @ n
+    m0 = abs(tau) + sn * np.tan(np.radians(PHI))
+    w = 0.25 * density * g.length[e] * g.r[e]
+    d, delta = res.bond_state["steps"][e]
+    assert delta[0] == pytest.approx(m0, rel=1e-9)
+    released = np.sum((d - np.r_[d[1:], 0.0]) * (delta / delta[0]) ** 2) * w
+    face = max(g.r[e], 0.2 * g.length[e])
+    assert released == pytest.approx(BUFFON * gfs * face, rel=1e-6)
+
+
+def test_gf_shear_keeps_the_prism_near_its_strength_where_brittle_faces_let_it_fall():
+    """Uniaxial compression, 988 nodes, tension softening with gf in both runs: over
+    events 150-300 the brittle shear faces (gf_shear = 0) carry at most 0.73 UCS, the
+    default gf_shear reaches 1.01 UCS (measured)."""
+    top = {}
+    for gfs in (0.0, None):
+        res = compress(prism(), max_events=300, gf=1e-3, gf_shear=gfs, stop_load_ratio=0.0)
+        top[gfs] = max(ev.load for ev in res.events[150:]) / ucs(C, PHI)
+    assert top[None] > 0.95 and top[0.0] < 0.85
+
+
+@pytest.mark.parametrize(
+    "kw",
+    [
+        dict(gf_shear=1e-2),  # the stress criterion fails faces in tension only
+        dict(criterion="mohr-coulomb", cohesion=C, friction_angle=PHI, gf_shear=-1e-3),
+        dict(criterion="mohr-coulomb", cohesion=C, friction_angle=PHI, gf_shear=float("nan")),
+        dict(criterion="mohr-coulomb", cohesion=C, friction_angle=PHI, gf_shear={"x": 1.0}),
+    ],
+)
+def test_bad_gf_shear_is_refused_by_name(kw):
+    sup, loads = pulled()
+    with pytest.raises(dv.InputError) as info:
+        dv.fracture(plate(), sup, loads, ft=FT, max_events=1, **kw)
+    assert info.value.param == "gf_shear"
 
 
 # ------------------------------------------------------------------ held loads
@@ -352,3 +452,24 @@ def test_events_under_held_loads_release_energy():
     )
     assert all(e.load_factor == 0.0 for e in res.events)
     assert res.dissipated > 0 and all(e.released >= -1e-12 for e in res.events)
+
+
+def test_the_scene_takes_gf_shear():
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "examples" / "confined_compression.toml"
+    sc = dv.scene.load(path, ["fracture.gf=1e-3", "fracture.gf_shear=0.02"])
+    opts = sc.fracture_options()
+    assert opts["gf_shear"] == 0.02 and opts["gf"] == 1e-3
+    assert dv.scene.load(path).fracture_options()["gf_shear"] is None
+
+
+def test_a_run_with_faces_softening_in_shear_goes_on_with_mohr_coulomb_only():
+    model = prism()
+    first = compress(model, max_events=3, gf=1e-3)
+    assert any(ev.mode != "tension" and not ev.broken for ev in first.events)
+    again = compress(model, max_events=2, gf=1e-3, start=first)
+    np.testing.assert_array_equal(again.stiffness_at(0), first.stiffness)
+    with pytest.raises(dv.InputError) as info:
+        dv.fracture(model, platens(model.mesh), None, ft=FT, gf=1e-3, start=first)
+    assert info.value.param == "criterion"

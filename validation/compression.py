@@ -37,8 +37,10 @@ def platens(mesh, d: float = 1e-3):
     return [dv.Fix("bottom", y=0.0), dv.Fix("top", y=-d), dv.Fix([mid], x=0.0)]
 
 
-def prism_run(h: float, c=C, phi=PHI, p=0.0, seed=1, max_events=4000):
-    """One prism: the result, the largest equilibrium error of its snapshots, seconds."""
+def prism_run(h: float, c=C, phi=PHI, p=0.0, seed=1, max_events=4000, per_node=None, **kw):
+    """One prism: the result, the largest equilibrium error of its snapshots, seconds
+    (``per_node``: that many events per node instead of ``max_events``; ``kw`` more
+    keywords of dv.fracture)."""
     mesh = dv.mesh.rectangle(1.0, 2.0, h, kind="cvt", seed=seed)
     model = dv.DV(mesh, E=E, nu=NU)
     held = [dv.Pressure("left", p), dv.Pressure("right", p)] if p else None
@@ -52,8 +54,8 @@ def prism_run(h: float, c=C, phi=PHI, p=0.0, seed=1, max_events=4000):
         criterion="mohr-coulomb",
         cohesion=c,
         friction_angle=phi,
-        max_events=max_events,
-        stop_load_ratio=0.05,
+        max_events=max_events if per_node is None else int(per_node * mesh.n_points),
+        **{"stop_load_ratio": 0.05, **kw},
     )
     seconds = time.perf_counter() - t0
     return res, _held_equilibrium(model, res, held), seconds
@@ -125,6 +127,107 @@ def uniaxial(hs) -> tuple[list, list]:
             f"{m['shear']:5d} {m['crushing']:7d}   ({s:.1f} s)"
         )
     return rows, results
+
+
+#: the prism's mode I fracture energy in the softening study (energy per area; about 20 x
+#: the smallest the finer mesh admits)
+GF_PRISM = 1e-3
+
+
+def softening(hs) -> tuple[list, list]:
+    """The prism with tension softening (gf) and faces failing in shear or crushing
+    brittle (gf_shear = 0), at the default gf_shear = 10 gf and at 30 gf; the default
+    on both meshes, each for the same number of events per node. Per run: the peak, the
+    load envelope at the end (the largest load of the last 10 % of the events: single
+    events far below it are SLA's snap-backs, mostly corner bonds cracking in tension),
+    the platen displacement and energy dissipated by then, and what the lattice released
+    through the faces that failed in shear or crushing and went through all their
+    teeth, against their gf_shear share."""
+    from dvstatic.crack.sla import BUFFON, GF_SHEAR_RATIO, _face
+
+    runs = [(hs[0], 0.0), (hs[0], None), (hs[0], 3 * GF_SHEAR_RATIO * GF_PRISM)]
+    runs += [(h, None) for h in hs[1:]]
+    rows, results = [], []
+    print(f"softening: uniaxial compression with gf = {GF_PRISM:g} (UCS 20.78)")
+    print(
+        "   nodes  gf_shear   peak/UCS  at event  events  end/UCS  end displ.  dissipated  "
+        "shear faces released"
+    )
+    for h, gfs in runs:
+        kw = dict(gf=GF_PRISM, gf_shear=gfs, stop_load_ratio=0.0)
+        res, _, seconds = prism_run(h, per_node=2.5, **kw)
+        model, mesh = res.model, res.model.mesh
+        tail = res.events[-max(1, len(res.events) // 10) :]
+        value = GF_SHEAR_RATIO * GF_PRISM if gfs is None else gfs
+        released, first = {}, {}
+        for ev in res.events:
+            released[ev.bond] = released.get(ev.bond, 0.0) + ev.released
+            first.setdefault(ev.bond, ev)
+        target = BUFFON * value * _face(model) * model.t
+        through = [
+            released[b] / target[b]
+            for b in res.broken
+            if first[b].mode != "tension" and not first[b].broken
+        ]
+        r = {
+            "nodes": mesh.n_points,
+            "gf": GF_PRISM,
+            "gf_shear": value,
+            "peak_over_ucs": res.peak.load / ucs(C, PHI),
+            "peak_event": res.peak.index,
+            "events": len(res.events),
+            "end_over_ucs": max(ev.load for ev in tail) / ucs(C, PHI),
+            "end_displacement": res.events[-1].control_displacement,
+            "dissipated": res.dissipated,
+            "modes": res.to_dict()["modes"],
+            "shear_faces_through_teeth": len(through),
+            "shear_released_over_share_median": float(np.median(through)) if through else None,
+            "stop": res.stop_reason,
+            "seconds": seconds,
+        }
+        rows.append(r)
+        results.append(res)
+        share = r["shear_released_over_share_median"]
+        print(
+            f"  {r['nodes']:6d}  {value:8.2g}  {r['peak_over_ucs']:8.3f}  {r['peak_event']:8d}  "
+            f"{r['events']:6d}  {r['end_over_ucs']:7.3f}  {r['end_displacement']:10.3e}  "
+            f"{r['dissipated']:10.3e}  "
+            + (f"{share:.3f} of gf_shear ({len(through)} faces)" if through else "-")
+            + f"   ({seconds:.0f} s, {r['stop']})"
+        )
+    return rows, results
+
+
+def plot_softening(rows, results, path) -> None:
+    """Load against platen displacement (SLA's snap-backs and all) and the load envelope
+    against events per node."""
+    from dvstatic import plot as dvplot
+
+    fig, axes = dvplot.figure(2, 1, (11.0, 4.5))
+    for r, res in zip(rows, results, strict=True):
+        d, p = res.curve()
+        label = f"{r['nodes']} nodes, gf_shear = {r['gf_shear']:g}"
+        axes[0][0].plot(d, p, lw=0.4, label=label)
+        load = np.array([ev.load for ev in res.events])
+        window = max(1, len(load) // 100)
+        top = _running_max(load, window)
+        axes[0][1].plot(np.arange(len(load)) / r["nodes"], top / ucs(C, PHI), lw=0.8, label=label)
+    for ax in axes[0]:
+        ax.legend(fontsize=7)
+    axes[0][0].axhline(ucs(C, PHI), color="k", ls="--", lw=0.8)
+    axes[0][0].set_xlabel("platen displacement")
+    axes[0][0].set_ylabel("axial stress")
+    axes[0][0].set_title(f"uniaxial compression, gf = {GF_PRISM:g}", fontsize=9)
+    axes[0][1].set_xlabel("events per node")
+    axes[0][1].set_ylabel("load envelope / UCS (largest over 1 % of the events)")
+    print("wrote", dvplot.save(fig, path))
+
+
+def _running_max(values: np.ndarray, window: int) -> np.ndarray:
+    """The largest of each run of ``window`` values, at every value's position."""
+    from scipy.ndimage import maximum_filter1d
+
+    return maximum_filter1d(values, size=window, mode="nearest")
 
 
 def pairs(h) -> list:
@@ -442,6 +545,8 @@ def main(argv=None) -> int:
     data = {}
     data["uniaxial"], results = uniaxial(hs)
     data["pairs"] = pairs(hs[0])
+    data["softening"], soft = softening(hs)
+    plot_softening(data["softening"], soft, args.out / "compression_softening.png")
     data["biaxial"] = biaxial(hs[0])
     data["brazilian"], _ = brazilian_mc(0.08 if args.quick else 0.04)
     h_near = 0.08 if args.quick else 0.04

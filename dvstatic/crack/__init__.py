@@ -11,7 +11,7 @@ breaking a bond does to the DV/RV force law is in :mod:`dvstatic.lattice.damage`
 from .criteria.mohr_coulomb import ucs
 from .options import FractureOptions
 from .result import Event, FractureResult, FractureStats, FractureTimings, Snapshot
-from .sla import EQUILIBRIUM_TOL, fracture
+from .sla import EQUILIBRIUM_TOL, GF_SHEAR_RATIO, fracture
 from .strength import Weibull
 
 __all__ = [
@@ -24,5 +24,6 @@ __all__ = [
     "FractureStats",
     "Snapshot",
     "EQUILIBRIUM_TOL",
+    "GF_SHEAR_RATIO",
     "ucs",
 ]

@@ -15,14 +15,24 @@ __all__ = ["Bonds", "Kept"]
 
 
 class Bonds:
-    """The damage state of the bonds: stiffness factors, teeth and thresholds."""
+    """The damage state of the bonds: stiffness factors, teeth and thresholds.
 
-    def __init__(self, strength, spring, energy, teeth: int):
+    ``energy`` and ``energy_shear`` (n_bonds,; None: brittle) are what the teeth of a
+    bond cracked in tension, and of one that failed in shear or crushing, release. A
+    cracked bond softens along its own elongation in the sense it failed in
+    (:attr:`sense`: +1 stretched, -1 shortened, as a crushed face's bond is) and keeps
+    the mode of its first failure (:attr:`mode`, an index into the criteria's modes).
+    """
+
+    def __init__(self, strength, spring, energy, teeth: int, energy_shear=None):
         n = len(strength)
         self.d = np.ones(n)
         self.tooth = np.zeros(n, dtype=np.int64)
         self.threshold = np.asarray(strength, float).copy()
         self.spring, self.energy, self.teeth = spring, energy, teeth
+        self.energy_shear = energy_shear
+        self.sense = np.ones(n)
+        self.mode = np.zeros(n, dtype=np.int64)
         self.steps: dict[int, tuple[np.ndarray, np.ndarray]] = {}
 
     def state(self, cracked) -> dict:
@@ -32,6 +42,8 @@ class Bonds:
             d=self.d.copy(),
             tooth=self.tooth.copy(),
             threshold=self.threshold.copy(),
+            sense=self.sense.copy(),
+            mode=self.mode.copy(),
             steps=steps,
             cracked=cracked.copy(),
             teeth=self.teeth,
@@ -55,31 +67,39 @@ class Bonds:
         self.tooth[:] = state["tooth"]
         hit = self.d < 1.0
         self.threshold[hit] = state["threshold"][hit]
+        self.sense[:] = state["sense"]
+        self.mode[:] = state["mode"]
         self.steps = {e: (a.copy(), b.copy()) for e, (a, b) in state["steps"].items()}
 
     def save(self, e: int):
         """All stiffness factors and bond ``e``'s tooth state, for :meth:`restore`."""
-        return self.d.copy(), int(self.tooth[e]), float(self.threshold[e]), e in self.steps
+        keep = (float(self.sense[e]), int(self.mode[e]))
+        return self.d.copy(), int(self.tooth[e]), float(self.threshold[e]), e in self.steps, keep
 
     def restore(self, e: int, saved) -> None:
-        d, tooth, threshold, had_steps = saved
+        d, tooth, threshold, had_steps, (sense, mode) = saved
         self.d[:] = d
         self.tooth[e], self.threshold[e] = tooth, threshold
+        self.sense[e], self.mode[e] = sense, mode
         if not had_steps:
             self.steps.pop(e, None)
 
-    def advance(self, e: int, peak: float, brittle: bool = False) -> bool:
-        """Soften or remove bond ``e`` cracking at elongation ``peak`` (``brittle``:
-        remove it at once); True if removed."""
-        if brittle:
-            self.d[e] = 0.0
-            return True
+    def advance(self, e: int, peak: float, mode: int = 0, sense: float = 1.0, spring=None) -> bool:
+        """Soften or remove bond ``e`` cracking at ``peak`` of its softening measure in
+        ``mode`` (0: tension, with :attr:`energy`, the measure its elongation; else
+        shear or crushing, with :attr:`energy_shear`); ``sense`` (+1 or -1) the measure's
+        sign kept from here on, ``spring`` its stiffness (energy = ``spring measure^2 /
+        2``; default the bond's spring). True if removed (no energy for its mode, or none
+        beyond the elastic energy at the crack)."""
         if self.d[e] >= 1.0:
-            en = None if self.energy is None else self.energy[e]
-            if en is None or peak <= 0 or en <= 0.5 * self.spring[e] * peak**2 * (1 + MIN_EXCESS):
+            energy = self.energy if mode == 0 else self.energy_shear
+            en = None if energy is None else energy[e]
+            k = self.spring[e] if spring is None else spring
+            self.mode[e], self.sense[e] = mode, sense
+            if en is None or peak <= 0 or k <= 0 or en <= 0.5 * k * peak**2 * (1 + MIN_EXCESS):
                 self.d[e] = 0.0
                 return True
-            d, delta = teeth_at(self.spring[e], peak, en, self.teeth)
+            d, delta = teeth_at(k, peak, en, self.teeth)
             self.steps[e] = (d[0], delta[0])
         self.tooth[e] += 1
         if self.tooth[e] >= self.teeth:

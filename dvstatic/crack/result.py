@@ -49,8 +49,10 @@ class Event:
         their bonds carry compression with their whole spring).
     mode : str
         How the bond's face failed: "tension", "shear" (Coulomb's line, the face not in
-        compression) or "crushing" (Coulomb's line, the face in compression); cracked
-        bonds soften in tension.
+        compression) or "crushing" (Coulomb's line, the face in compression); the later
+        teeth of a softening bond keep the mode of its first failure (a face cracked in
+        tension softens along its elongation, one failed in shear or crushing along its
+        Coulomb measure, with ``gf_shear``).
 
     With held loads, ``load`` and ``control_displacement`` are those of the whole state
     (held + ``load_factor`` x reference): force control, the growing load and the

@@ -113,7 +113,9 @@ class EventSearch:
         w, g = self.factors()
         intact = np.all(bonds.d[self.sp.tri_bonds] >= 1.0, axis=1).astype(float)
         held = self.xh if held is None else held
-        return self.criterion.critical(held, self.x, w, g, intact, bonds.d, bonds.threshold)
+        return self.criterion.critical(
+            held, self.x, w, g, intact, bonds.d, bonds.threshold, bonds.sense, bonds.mode
+        )
 
     def _at(self, lam: float) -> np.ndarray:
         """The state (2N,) at load factor ``lam``."""

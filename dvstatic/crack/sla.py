@@ -15,7 +15,10 @@ from __future__ import annotations
 import dataclasses
 import inspect
 import logging
+import math
+import numbers
 import time
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -28,7 +31,7 @@ from ..solvers.options import options_docstring
 from .bonds import Bonds, Kept
 from .contact import Contact
 from .control import criterion_parameters, held_problem, reference
-from .criteria import MODES, criterion_for, per_bond
+from .criteria import MODES, REGISTRY, criterion_for, per_bond
 from .options import FractureOptions
 from .pieces import Pieces, bond_triangles
 from .result import Event, FractureResult, FractureStats, FractureTimings, Snapshot
@@ -38,7 +41,7 @@ from .updates import UpdatedSolver
 
 log = logging.getLogger(__name__)
 
-__all__ = ["fracture", "EQUILIBRIUM_TOL"]
+__all__ = ["fracture", "EQUILIBRIUM_TOL", "GF_SHEAR_RATIO"]
 
 #: relative residual every recorded state must reach
 EQUILIBRIUM_TOL = 1e-10
@@ -46,6 +49,11 @@ EQUILIBRIUM_TOL = 1e-10
 #: average (Buffon: sum_e r_e l_e |sin theta_e| / A with sum_e r_e l_e = 2 A and the mean
 #: |sin| 2 / pi): each bond gets this share of gf times its face
 BUFFON = np.pi / 4
+#: ``gf_shear`` when it is not given, in units of ``gf``: the mode II fracture energy of
+#: concrete and rock is often taken as ten times the mode I one (interface and cohesive
+#: crack models of concrete, e.g. Carol, Prat & Lopez 1997; measured ratios run from
+#: about 10 to 25)
+GF_SHEAR_RATIO = 10.0
 #: secant stiffness (relative to the initial one) below which the body is a mechanism
 MECHANISM = 1e-6
 
@@ -97,6 +105,7 @@ def fracture(
     held=None,
     ft,
     gf=None,
+    gf_shear=None,
     cohesion=None,
     friction_angle=None,
     weibull: Weibull | None = None,
@@ -108,6 +117,7 @@ def fracture(
     _check_options(model, weibull)
     _check_start(model, start)
     params = criterion_parameters(opts.criterion, cohesion=cohesion, friction_angle=friction_angle)
+    shear_energy = _shear_energies(model, opts.criterion, gf, gf_shear)
     timings: dict[str, float] = {}
     t_start = time.perf_counter()
     problem = Problem.build(model, supports, loads)
@@ -117,6 +127,7 @@ def fracture(
     criterion = criterion_for(opts.criterion, model, sp_)
     s0, s_tension = criterion.prepare(model, ft, weibull, timings, dofs, params)
     energy = None if gf is None else _energies(model, gf, s_tension)
+    energy = (energy, shear_energy)
     _warn_rows(model.mesh)
     fh = None if kept is None else kept.f
     res = _run(
@@ -148,6 +159,7 @@ def _signature() -> inspect.Signature:
         inspect.Parameter("held", kw, default=None),
         inspect.Parameter("ft", kw),
         inspect.Parameter("gf", kw, default=None),
+        inspect.Parameter("gf_shear", kw, default=None),
         inspect.Parameter("cohesion", kw, default=None),
         inspect.Parameter("friction_angle", kw, default=None),
         inspect.Parameter("weibull", kw, default=None),
@@ -182,7 +194,13 @@ fracture.__doc__ = f"""Quasi-static fracture by bond breaking, event by event (s
     gf : float or dict, optional
         Fracture energy (energy per unit crack area, e.g. N/m): a bond cracked in
         tension softens in ``teeth`` saw-tooth steps. None: brittle bonds (removed at
-        their strength). Faces that fail in shear or crushing lose their bond at once.
+        their strength).
+    gf_shear : float or dict, optional
+        Fracture energy of faces that fail in shear or crushing (``criterion=
+        "mohr-coulomb"`` only): their bonds soften in teeth along their own elongation
+        (a crushed face's bond along its shortening), releasing ``gf_shear`` per unit
+        face. None: ``{GF_SHEAR_RATIO:g} gf`` (brittle without ``gf``); 0: such faces
+        lose their bond at once.
     cohesion, friction_angle : float or dict, optional
         Cohesion (stress units, > 0) and friction angle (degrees, in [0, 70)) of
         ``criterion="mohr-coulomb"`` (required by it, refused by the others), per region
@@ -229,6 +247,54 @@ def _warn_rows(mesh: Mesh) -> None:
         )
 
 
+def _shear_energies(model, criterion: str, gf, gf_shear):
+    """Energy each bond's teeth release when its face fails in shear or crushing
+    (force x length; None: brittle), from ``gf_shear`` or its default
+    :data:`GF_SHEAR_RATIO` x ``gf``.
+
+    Raises
+    ------
+    InputError
+        ``gf_shear`` for a criterion without shear failure, or a negative one.
+    """
+    if not REGISTRY[criterion].shear:
+        if gf_shear is not None:
+            raise InputError(
+                f"gf_shear is the fracture energy of faces failing in shear or crushing: "
+                f"criterion {criterion!r} fails faces in tension only; give "
+                "criterion='mohr-coulomb' or leave gf_shear out",
+                "gf_shear",
+            )
+        return None
+    if gf_shear is None:
+        if gf is None:
+            return None
+        gf_shear = (
+            {k: GF_SHEAR_RATIO * v for k, v in gf.items()}
+            if isinstance(gf, Mapping)
+            else GF_SHEAR_RATIO * gf
+        )
+    gfs = per_bond(model, gf_shear, "gf_shear", _non_negative)
+    if not np.any(gfs > 0):
+        return None
+    return BUFFON * gfs * model.t * _face(model)
+
+
+def _non_negative(value, name: str) -> None:
+    ok = isinstance(value, numbers.Real) and not isinstance(value, bool)
+    if not ok or not math.isfinite(float(value)) or value < 0:
+        raise InputError(
+            f"{name} must be a finite number >= 0 (0: brittle faces), got {value!r}", name
+        )
+
+
+def _face(model) -> np.ndarray:
+    """The crack face of every bond: its Voronoi side (bounded below on obtuse
+    triangles)."""
+    geo = model.geometry
+    return np.maximum(geo.r, 0.2 * geo.length)
+
+
 def _energies(model, gf, s_tension) -> np.ndarray:
     """Energy each bond's teeth release (force x length), see :mod:`.strength`.
 
@@ -237,9 +303,7 @@ def _energies(model, gf, s_tension) -> np.ndarray:
     InputError
         If ``gf`` is too small for the mesh (a bond would snap back on its own).
     """
-    geo = model.geometry
-    # the crack face of a bond: its Voronoi side (bounded below on obtuse triangles)
-    face = np.maximum(geo.r, 0.2 * geo.length)
+    face = _face(model)
     gfb = per_bond(model, gf, "gf")
     need = smallest_gf(s_tension, model.operator.spring, face, model.t)
     if np.any(gfb <= need):
@@ -260,7 +324,7 @@ class _Analysis(EventSearch):
     def __init__(self, model, sp_, criterion, s0, energy, problem, opts):
         self.dofs, self.values, self.f, self.control, self.ref, self.fh = problem
         self.model, self.sp, self.criterion, self.s0, self.opts = model, sp_, criterion, s0, opts
-        self.bonds = Bonds(s0, model.operator.spring, energy, opts.teeth)
+        self.bonds = Bonds(s0, model.operator.spring, energy[0], opts.teeth, energy[1])
         self.solver = UpdatedSolver(
             model.mesh, sp_, self.dofs, self.values, self.f, max_rank=opts.max_rank
         )
@@ -276,7 +340,22 @@ class _Analysis(EventSearch):
         self.peak = 0.0
 
     def resume(self, state: dict) -> None:
-        """Start from the damage of an earlier run (before :meth:`start`)."""
+        """Start from the damage of an earlier run (before :meth:`start`).
+
+        Raises
+        ------
+        InputError
+            The earlier run softened faces in shear or crushing and this criterion has
+            no such faces (their teeth count in its Coulomb measure).
+        """
+        sheared = (state["mode"] != 0) & (state["d"] > 0) & (state["d"] < 1)
+        if np.any(sheared) and not self.criterion.shear:
+            raise InputError(
+                f"start: the earlier run left {int(sheared.sum())} face(s) softening in "
+                f"shear or crushing, whose teeth count in Coulomb's measure: go on with "
+                f"criterion='mohr-coulomb' (got {self.criterion.name!r})",
+                "criterion",
+            )
         self.bonds.load(state)
         self.contact.cracked[:] = state["cracked"]
         self.initial = self.bonds.d.copy()
@@ -319,7 +398,12 @@ class _Analysis(EventSearch):
         before = (self.res, self.p_ref, self.u_ref, self.xh, self.p_held, self.u_held)
         state = (self._at(lam), self.factors()) if self.fh is not None else None
         try:
-            removed = bonds.advance(e, crit.elongation, brittle=crit.mode != 0)
+            peak, sense, spring = crit.elongation, 1.0, None
+            if crit.mode != 0 and bonds.d[e] >= 1.0:
+                peak, sense, spring = self.criterion.crack_measure(
+                    e, crit.mode, self._at(lam), bonds.d
+                )
+            removed = bonds.advance(e, peak, crit.mode, sense, spring)
             if crit.mode == 0:
                 self.contact.cracked[e] = True
             self.solver.touch(self.bond_tris[e])

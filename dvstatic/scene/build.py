@@ -269,6 +269,7 @@ class Scene:
         return dict(
             ft=ft,
             gf=gf,
+            gf_shear=fr["gf_shear"],
             cohesion=fr["cohesion"],
             friction_angle=fr["friction_angle"],
             weibull=weibull,

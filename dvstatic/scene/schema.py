@@ -275,6 +275,11 @@ SCHEMA: dict[str, F] = {
                 "fracture energy (energy per crack area): saw-tooth softening of cracked bonds; "
                 "omit for brittle bonds",
             ),
+            "gf_shear": F(
+                "number",
+                "criterion mohr-coulomb: fracture energy of faces failing in shear or "
+                "crushing (>= 0; 0: they break at once; default 10 gf, brittle without gf)",
+            ),
             "weibull_m": F(
                 "number", "Weibull modulus of a random strength field (omit: uniform strength)"
             ),

@@ -96,6 +96,8 @@ class Criterion(ABC):
     name: ClassVar[str] = ""
     #: the strength keywords of ``dv.fracture`` beyond ``ft`` (and ``gf``) it needs
     parameters: ClassVar[tuple[str, ...]] = ()
+    #: whether it fails faces in shear or crushing (then ``gf_shear`` applies)
+    shear: ClassVar[bool] = False
 
     def __init__(self, model, sp_):
         self.sp = sp_
@@ -168,21 +170,39 @@ class Criterion(ABC):
         u = x.reshape(-1, 2)
         return np.einsum("ei,ei->e", self.n, u[self.bonds[:, 1]] - u[self.bonds[:, 0]])
 
-    def critical(self, xh, xg, w, g, intact, d: np.ndarray, threshold: np.ndarray) -> Critical:
+    def cracked(self, x, modes, sense) -> np.ndarray:
+        """The softening measure of every cracked bond in state ``x``, linear in ``x``,
+        shape (n_bonds,): its elongation times its ``sense`` (``modes``, the modes the
+        bonds first failed in, are for criteria that soften faces in shear)."""
+        return sense * self.softening(x)
+
+    def crack_measure(self, e: int, mode: int, x, d=None) -> tuple[float, float, float | None]:
+        """``(peak, sense, spring)`` of bond ``e`` cracking in ``mode`` in state ``x``
+        (``d`` the bonds' stiffness factors before it cracks):
+        its softening measure there, the measure's sign from here on and the stiffness
+        that makes ``spring peak^2 / 2`` the elastic energy at the crack (None: the
+        bond's spring; the measure is its elongation)."""
+        return float(self.softening(x)[e]), 1.0, None
+
+    def critical(
+        self, xh, xg, w, g, intact, d: np.ndarray, threshold: np.ndarray, sense=1.0, modes=0
+    ) -> Critical:
         """The bond that reaches its threshold at the smallest load factor under
         ``xh + lambda xg`` (``xh`` the held part, None without one). Intact bonds
-        (``d >= 1``) answer by the criterion, cracked ones by their elongation against
-        the tooth's threshold; bonds the held part alone overloads come first, at
-        ``lambda = 0``, the most overloaded one first; of bonds that tie (within
-        :data:`TIE`) the first by index."""
+        (``d >= 1``) answer by the criterion, cracked ones by their elongation times
+        their ``sense`` (:meth:`cracked`) against the tooth's threshold, in the mode of
+        their first failure (``modes``, n_bonds,); bonds the
+        held part alone overloads come first, at ``lambda = 0``, the most overloaded one
+        first; of bonds that tie (within :data:`TIE`) the first by index."""
         sg = self.softening(xg)
         sh = 0.0 if xh is None else self.softening(xh)
         ratio, excess, mode = self.factors(xh, xg, w, g, intact, threshold)
-        s_ratio, s_excess = linear_factors(sh, sg, threshold)
+        ch = 0.0 if xh is None else self.cracked(xh, modes, sense)
+        s_ratio, s_excess = linear_factors(ch, self.cracked(xg, modes, sense), threshold)
         cracked = d < 1.0
         ratio = np.where(cracked, s_ratio, ratio)
         excess = np.where(cracked, s_excess, excess)
-        mode = np.where(cracked, 0, mode)
+        mode = np.where(cracked, modes, mode)
         gone = d <= 0
         ratio[gone] = excess[gone] = 0.0
         if np.any(excess >= 1.0):

@@ -8,6 +8,7 @@ import math
 import numpy as np
 
 from ...errors import InputError
+from ...stress.virial import triangle_strains, triangle_stress
 from .base import linear_factors, register
 from .responses import per_bond
 from .stress import Stress
@@ -23,6 +24,18 @@ def ucs(cohesion: float, friction_angle: float) -> float:
     (stress units; ``friction_angle`` in degrees)."""
     phi = math.radians(friction_angle)
     return 2.0 * cohesion * math.cos(phi) / (1.0 - math.sin(phi))
+
+
+def _face_average(model):
+    """(n_bonds, n_triangles): the area-weighted mean over every bond's triangles."""
+    import scipy.sparse as sp
+
+    mesh = model.mesh
+    tb = mesh.topology.tri_bonds
+    area = np.repeat(model.geometry.tri_area, 3)
+    rows, cols = tb.ravel(), np.repeat(np.arange(mesh.n_triangles), 3)
+    a = sp.csr_matrix((area, (rows, cols)), shape=(mesh.n_bonds, mesh.n_triangles))
+    return sp.diags(1.0 / np.asarray(a.sum(axis=1)).ravel()) @ a
 
 
 def _angle(value, name: str) -> None:
@@ -54,6 +67,7 @@ class MohrCoulomb(Stress):
 
     name = "mohr-coulomb"
     parameters = ("cohesion", "friction_angle")
+    shear = True
 
     def set_parameters(self, model, ftb, factors, cohesion=None, friction_angle=None) -> None:
         missing = [
@@ -69,6 +83,52 @@ class MohrCoulomb(Stress):
         self.ft = ftb * f
         self.c = per_bond(model, cohesion, "cohesion") * f
         self.tan = np.tan(np.radians(per_bond(model, friction_angle, "friction_angle", _angle)))
+        self.model = model
+        self._faces = _face_average(model)
+
+    # ------------------------------------------------------- faces failed in shear
+    def trial(self, x):
+        """The face's own elastic trial stress: the continuum law of each triangle
+        applied to its P1 strain, averaged (by area) over the bond's triangles. Returns
+        the normal and shear stress on every bond's face and the energy density
+        ``sigma : eps`` there, (n_bonds,) each."""
+        mesh = self.model.mesh
+        u = np.asarray(x).reshape(-1, 2)
+        sig = triangle_stress(self.model, u)
+        eps = triangle_strains(mesh, u)
+        density = sig[:, 0, 0] * eps[:, 0] + sig[:, 1, 1] * eps[:, 1] + 2 * sig[:, 0, 1] * eps[:, 2]
+        v = self._faces @ np.c_[sig[:, 0, 0], sig[:, 1, 1], sig[:, 0, 1], density]
+        n = self.n
+        nx2, ny2, nxy = n[:, 0] ** 2, n[:, 1] ** 2, n[:, 0] * n[:, 1]
+        sn = v[:, 0] * nx2 + v[:, 1] * ny2 + 2 * v[:, 2] * nxy
+        tau = v[:, 2] * (nx2 - ny2) + nxy * (v[:, 1] - v[:, 0])
+        return sn, tau, v[:, 3]
+
+    def cracked(self, x, modes, sense) -> np.ndarray:
+        """Cracked in tension: the elongation times its sense. Failed in shear or
+        crushing: Coulomb's measure ``s tau + sigma_n tan(phi)`` of the face's own trial
+        stress (:meth:`trial`; ``s`` the sense of the shear as the face failed), which a
+        softening face's strain makes grow as it softens."""
+        out = sense * self.softening(x)
+        shear = np.asarray(modes) != 0
+        if np.any(shear):
+            sn, tau, _ = self.trial(x)
+            out = np.where(shear, sense * tau + sn * self.tan, out)
+        return out
+
+    def crack_measure(self, e: int, mode: int, x, d=None):
+        """Cracked in tension: the base's. In shear or crushing: the face's Coulomb
+        measure of its trial stress, the sense of its shear, and the stiffness that
+        makes ``spring peak^2 / 2`` the continuum's elastic energy in the bond's share
+        of the body (``sigma : eps l_e r_e t / 4``; a crack band one face wide)."""
+        if mode == 0:
+            return super().crack_measure(e, mode, x, d)
+        sn, tau, density = (v[e] for v in self.trial(x))
+        sense = 1.0 if tau >= 0 else -1.0
+        peak = sense * tau + sn * self.tan[e]
+        geo = self.model.geometry
+        energy = 0.25 * density * geo.length[e] * geo.r[e] * self.model.t
+        return float(peak), sense, (2.0 * energy / peak**2 if peak > 0 else 0.0)
 
     def face(self, x, w, g, intact=None) -> tuple[np.ndarray, np.ndarray]:
         """Normal and shear stress on every bond's face in state ``x``, (n_bonds,) each
