@@ -707,3 +707,42 @@ def test_the_event_loop_runs_on_one_blas_thread(monkeypatch):
     with pytest.raises(dv.InputError) as err:
         dv.fracture(model, sup, loads, ft=FT, blas_threads=0)
     assert err.value.param == "blas_threads"
+
+
+def test_the_patch_stress_and_elongations_are_the_sums_they_stand_for():
+    """The sparse operators of the criterion against the sums written out: a bond's patch
+    stress is the area-weighted mean of the triangle stresses at its two end nodes (a
+    triangle at both ends counted twice), its elongation n . (u_j - u_i)."""
+    from dvstatic.crack.criteria import criterion_for
+    from dvstatic.lattice.damage import split
+
+    model = dv.DV(plate(0.12), E=E, nu=NU)
+    mesh, sp_ = model.mesh, split(model)
+    rng = np.random.default_rng(4)
+    u = rng.normal(size=2 * mesh.n_points)
+    d = rng.uniform(0.2, 1.0, mesh.n_bonds)
+    w, g = sp_.factors(d)
+    geo = model.geometry
+    weight = (rng.uniform(size=mesh.n_triangles) > 0.3).astype(float)
+    s, covered = sp_.patch_stress(u, w, g, geo.tri_l, geo.tri_area, weight)
+    f = sp_.forces(u, w, g) * geo.tri_l * weight[:, None]
+    n = np.stack([sp_.nn[:, :, 0], sp_.nn[:, :, 3], sp_.nn[:, :, 1]], axis=2)  # xx, yy, xy
+    tri_sig = np.einsum("mk,mkc->mc", f, n)
+    a = geo.tri_area * weight
+    for e in rng.choice(mesh.n_bonds, 25, replace=False):
+        i, j = mesh.topology.bonds[e]
+        count = np.isin(mesh.triangles, [i, j]).sum(axis=1)
+        total = np.sum(count * a)
+        expect = (count[:, None] * tri_sig).sum(0) / total if total > 0 else np.zeros(3)
+        assert covered[e] == (total > 0)
+        np.testing.assert_allclose(
+            [s[e, 0, 0], s[e, 1, 1], s[e, 0, 1]],
+            expect,
+            rtol=1e-12,
+            atol=1e-12 * np.abs(tri_sig).max(),
+        )
+    crit = criterion_for("stress", model, sp_)
+    b = mesh.topology.bonds
+    uu = u.reshape(-1, 2)
+    direct = np.einsum("ei,ei->e", geo.direction, uu[b[:, 1]] - uu[b[:, 0]])
+    np.testing.assert_allclose(crit.softening(u), direct, rtol=1e-12, atol=1e-14)

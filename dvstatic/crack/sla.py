@@ -334,6 +334,7 @@ class _Analysis(EventSearch):
         self.contact = Contact(model.mesh.n_bonds, opts.contact)
         self.spring = np.bincount(sp_.tri_bonds.ravel(), sp_.w.ravel(), sp_.n_bonds)
         self.initial = None
+        self._factors = None
         self.snaps = Kept(opts.snapshots, opts.snapshot_every)
         self.events: list[Event] = []
         self.broken: list[int] = []
@@ -366,9 +367,15 @@ class _Analysis(EventSearch):
         return self.contact.effective(self.bonds.d)
 
     def factors(self):
-        """The damaged stiffness's factors ``(w, g)``, closed cracks with their spring."""
-        closed = self.contact.closed
-        return self.sp.factors(self.bonds.d, closed if closed.any() else None)
+        """The damaged stiffness's factors ``(w, g)``, closed cracks with their spring
+        (kept while the damage and the contact status stay the same; read only)."""
+        d, closed = self.bonds.d, self.contact.closed
+        memo = self._factors
+        if memo is not None and np.array_equal(memo[0], d) and np.array_equal(memo[1], closed):
+            return memo[2]
+        wg = self.sp.factors(d, closed if closed.any() else None)
+        self._factors = (d.copy(), closed.copy(), wg)
+        return wg
 
     def start(self) -> None:
         self.solver.rebase(*self.factors())

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import time
 from abc import ABC, abstractmethod
+from functools import cached_property
 from typing import ClassVar, NamedTuple
 
 import numpy as np
@@ -167,14 +168,27 @@ class Criterion(ABC):
     def softening(self, x) -> np.ndarray:
         """What a cracked bond softens by: its elongation (length) per unit load factor,
         shape (n_bonds,)."""
-        u = x.reshape(-1, 2)
-        return np.einsum("ei,ei->e", self.n, u[self.bonds[:, 1]] - u[self.bonds[:, 0]])
+        return self._elongation @ np.asarray(x).ravel()
 
-    def cracked(self, x, modes, sense) -> np.ndarray:
+    @cached_property
+    def _elongation(self):
+        """(n_bonds, 2N) CSR: the bonds' elongations of a displacement."""
+        import scipy.sparse as sp
+
+        e = len(self.bonds)
+        dofs = 2 * self.bonds[:, [0, 0, 1, 1]] + np.array([0, 1, 0, 1])
+        vals = np.c_[-self.n, self.n]
+        n_dof = 2 * (int(self.bonds.max()) + 1)
+        return sp.csr_matrix(
+            (vals.ravel(), (np.repeat(np.arange(e), 4), dofs.ravel())), shape=(e, n_dof)
+        )
+
+    def cracked(self, x, modes, sense, elongation=None) -> np.ndarray:
         """The softening measure of every cracked bond in state ``x``, linear in ``x``,
-        shape (n_bonds,): its elongation times its ``sense`` (``modes``, the modes the
-        bonds first failed in, are for criteria that soften faces in shear)."""
-        return sense * self.softening(x)
+        shape (n_bonds,): its elongation (``elongation``, if computed already) times its
+        ``sense`` (``modes``, the modes the bonds first failed in, are for criteria that
+        soften faces in shear)."""
+        return sense * (self.softening(x) if elongation is None else elongation)
 
     def crack_measure(self, e: int, mode: int, x, d=None) -> tuple[float, float, float | None]:
         """``(peak, sense, spring)`` of bond ``e`` cracking in ``mode`` in state ``x``
@@ -197,8 +211,8 @@ class Criterion(ABC):
         sg = self.softening(xg)
         sh = 0.0 if xh is None else self.softening(xh)
         ratio, excess, mode = self.factors(xh, xg, w, g, intact, threshold)
-        ch = 0.0 if xh is None else self.cracked(xh, modes, sense)
-        s_ratio, s_excess = linear_factors(ch, self.cracked(xg, modes, sense), threshold)
+        ch = 0.0 if xh is None else self.cracked(xh, modes, sense, sh)
+        s_ratio, s_excess = linear_factors(ch, self.cracked(xg, modes, sense, sg), threshold)
         cracked = d < 1.0
         ratio = np.where(cracked, s_ratio, ratio)
         excess = np.where(cracked, s_excess, excess)

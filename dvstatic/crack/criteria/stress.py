@@ -31,8 +31,11 @@ class Stress(Criterion):
 
     def set_response(self, h: np.ndarray, patches) -> None:
         """Tensions (n_bonds, 3) and patch stresses (3 x (stress, covered)) under the unit
-        uniform stresses xx, yy, xy."""
+        uniform stresses xx, yy, xy; ``h_nn = n . H_e . n``, a bond's tension per unit
+        normal stress across its face."""
         self.h = h
+        n = self.n
+        self.h_nn = h[:, 0] * n[:, 0] ** 2 + h[:, 1] * n[:, 1] ** 2 + h[:, 2] * n[:, 0] * n[:, 1]
         lam = principal_response([h[:, 0], h[:, 1], h[:, 2]])
         p = np.stack([voigt(s) for s, _ in patches], axis=2)  # (xx, yy, xy) -> patch
         ok = np.linalg.cond(p) < 1e3
@@ -40,11 +43,6 @@ class Stress(Criterion):
         self.unbias[ok] = np.linalg.inv(p[ok])
         #: slivers, and bonds whose patch is degenerate, use their tension
         self.use_tension = (self.h_nn < 0.25 * lam) | ~ok | ~patches[0][1]
-
-    @property
-    def h_nn(self) -> np.ndarray:
-        n, h = self.n, self.h
-        return h[:, 0] * n[:, 0] ** 2 + h[:, 1] * n[:, 1] ** 2 + h[:, 2] * n[:, 0] * n[:, 1]
 
     def thresholds(self, s_tension, ftb, factors):
         scale = ftb * self.h_nn * (1.0 if factors is None else factors)
