@@ -268,3 +268,13 @@ def test_cook_membrane_stresses_on_slanted_straight_edges():
     far = np.min([np.hypot(*(x - c).T) for c in corners], axis=0) > 6.0
     err = np.linalg.norm((s - ref)[far].reshape(-1, 4), axis=1) / np.abs(ref[far]).max()
     assert np.sqrt(np.mean(err**2)) < 0.03
+
+
+def test_the_strain_operator_gives_the_triangle_strains():
+    from dvstatic.stress.virial import strain_operator, triangle_strains
+
+    mesh = dv.mesh.rectangle(2.0, 1.0, 0.1, kind="cvt", seed=1)
+    u = np.random.default_rng(0).normal(size=2 * mesh.n_points)
+    np.testing.assert_allclose(
+        (strain_operator(mesh) @ u).reshape(-1, 3), triangle_strains(mesh, u), atol=1e-12
+    )

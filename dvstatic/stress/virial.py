@@ -18,6 +18,8 @@ __all__ = [
     "node_stress",
     "strain_stress",
     "triangle_strains",
+    "strain_operator",
+    "continuum_stress",
     "triangle_stress",
     "out_of_plane_stress",
 ]
@@ -85,6 +87,13 @@ def triangle_stress(model: VoronoiModel, u) -> np.ndarray:
     model = check_model(model)
     mesh = model.mesh
     eps = triangle_strains(mesh, as_displacement(u, mesh.n_points))
+    return continuum_stress(model, eps)
+
+
+def continuum_stress(model: VoronoiModel, eps: np.ndarray) -> np.ndarray:
+    """The continuum law of each triangle's material applied to strains ``eps`` (M, 3;
+    xx, yy and the tensor shear xy), shape (M, 2, 2) (in-plane; plane strain: the
+    effective constants)."""
     consts = np.array([m.in_plane for m in model.all_materials])[model.material_of_triangle]
     E, nu = consts[:, 0], consts[:, 1]
     c = E / (1 - nu**2)
@@ -92,6 +101,33 @@ def triangle_stress(model: VoronoiModel, u) -> np.ndarray:
     syy = c * (eps[:, 1] + nu * eps[:, 0])
     sxy = E / (1 + nu) * eps[:, 2]
     return np.stack([np.stack([sxx, sxy], -1), np.stack([sxy, syy], -1)], -2)
+
+
+def strain_operator(mesh: Mesh):
+    """(3M, 2N) CSR: the P1 strain ``(exx, eyy, exy)`` of every triangle (the rows of
+    :func:`triangle_strains`, tensor shear) as a linear map of the displacement."""
+    import scipy.sparse as sp
+
+    x = mesh.triangle_coordinates()
+    d1, d2 = x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]
+    det = d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]
+    g1 = np.c_[d2[:, 1], -d2[:, 0]] / det[:, None]  # grad of vertex 1's shape function
+    g2 = np.c_[-d1[:, 1], d1[:, 0]] / det[:, None]
+    g = np.stack([-g1 - g2, g1, g2], axis=1)  # (M, 3 vertices, 2)
+    m = len(x)
+    dof = 2 * mesh.triangles  # (M, 3): the x dof of every vertex
+    rows, cols, vals = [], [], []
+    for k, (cx, cy) in enumerate(((0, None), (None, 1), (1, 0))):
+        for comp, along in ((0, cx), (1, cy)):  # d u_comp / d x_along
+            if along is None:
+                continue
+            rows.append(np.repeat(3 * np.arange(m) + k, 3))
+            cols.append((dof + comp).ravel())
+            vals.append((0.5 if k == 2 else 1.0) * g[:, :, along].ravel())
+    return sp.csr_matrix(
+        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+        shape=(3 * m, 2 * mesh.n_points),
+    )
 
 
 def strain_stress(model: VoronoiModel, u) -> np.ndarray:

@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from ...errors import InputError
-from ...stress.virial import triangle_strains, triangle_stress
+from ...stress.virial import continuum_stress, strain_operator
 from .base import linear_factors, register
 from .responses import per_bond
 from .stress import Stress
@@ -85,6 +85,7 @@ class MohrCoulomb(Stress):
         self.tan = np.tan(np.radians(per_bond(model, friction_angle, "friction_angle", _angle)))
         self.model = model
         self._faces = _face_average(model)
+        self._strain = strain_operator(model.mesh)
 
     # ------------------------------------------------------- faces failed in shear
     def trial(self, x):
@@ -92,12 +93,11 @@ class MohrCoulomb(Stress):
         applied to its P1 strain, averaged (by area) over the bond's triangles. Returns
         the normal and shear stress on every bond's face and the energy density
         ``sigma : eps`` there, (n_bonds,) each."""
-        mesh = self.model.mesh
-        u = np.asarray(x).reshape(-1, 2)
-        sig = triangle_stress(self.model, u)
-        eps = triangle_strains(mesh, u)
-        density = sig[:, 0, 0] * eps[:, 0] + sig[:, 1, 1] * eps[:, 1] + 2 * sig[:, 0, 1] * eps[:, 2]
-        v = self._faces @ np.c_[sig[:, 0, 0], sig[:, 1, 1], sig[:, 0, 1], density]
+        eps = (self._strain @ np.asarray(x).ravel()).reshape(-1, 3)
+        sig = continuum_stress(self.model, eps)
+        sxx, syy, sxy = sig[:, 0, 0], sig[:, 1, 1], sig[:, 0, 1]
+        density = sxx * eps[:, 0] + syy * eps[:, 1] + 2 * sxy * eps[:, 2]
+        v = self._faces @ np.c_[sxx, syy, sxy, density]
         n = self.n
         nx2, ny2, nxy = n[:, 0] ** 2, n[:, 1] ** 2, n[:, 0] * n[:, 1]
         sn = v[:, 0] * nx2 + v[:, 1] * ny2 + 2 * v[:, 2] * nxy
