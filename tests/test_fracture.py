@@ -725,7 +725,10 @@ def test_the_patch_stress_and_elongations_are_the_sums_they_stand_for():
     geo = model.geometry
     weight = (rng.uniform(size=mesh.n_triangles) > 0.3).astype(float)
     s, covered = sp_.patch_stress(u, w, g, geo.tri_l, geo.tri_area, weight)
-    f = sp_.forces(u, w, g) * geo.tri_l * weight[:, None]
+    elong = np.einsum("mkj,mj->mk", sp_.b, u[sp_.dofs])  # not the sparse operator
+    shares = w * elong + g[:, None] * np.einsum("mkj,mj->mk", sp_.m, elong)
+    np.testing.assert_allclose(sp_.forces(u, w, g), shares, rtol=1e-12, atol=1e-12)
+    f = shares * geo.tri_l * weight[:, None]
     n = np.stack([sp_.nn[:, :, 0], sp_.nn[:, :, 3], sp_.nn[:, :, 1]], axis=2)  # xx, yy, xy
     tri_sig = np.einsum("mk,mkc->mc", f, n)
     a = geo.tri_area * weight

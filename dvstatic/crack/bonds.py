@@ -19,9 +19,10 @@ class Bonds:
 
     ``energy`` and ``energy_shear`` (n_bonds,; None: brittle) are what the teeth of a
     bond cracked in tension, and of one that failed in shear or crushing, release. A
-    cracked bond softens along its own elongation in the sense it failed in
-    (:attr:`sense`: +1 stretched, -1 shortened, as a crushed face's bond is) and keeps
-    the mode of its first failure (:attr:`mode`, an index into the criteria's modes).
+    cracked bond softens along its criterion's softening measure (its elongation in
+    tension; the face's Coulomb measure in shear or crushing) times :attr:`sense` (+1 in
+    tension; the sign of the face's shear as it failed) and keeps the mode of its first
+    failure (:attr:`mode`, an index into the criteria's modes).
     """
 
     def __init__(self, strength, spring, energy, teeth: int, energy_shear=None):

@@ -13,7 +13,7 @@ stays off, as for any cracked bond: its tension is then its spring times its
 elongation, and the stiffness stays symmetric positive semi-definite). A face is closed
 while its bond's elongation is negative (the faces would overlap: the crack has no gap
 left) and open otherwise, so a closed bond never carries tension. Faces that failed in
-shear or crushing lost their bond for good and take no part.
+shear or crushing (broken, or softening with ``gf_shear``) take no part.
 """
 
 from __future__ import annotations

@@ -107,6 +107,7 @@ class Criterion(ABC):
         self.area = geo.tri_area * model.t
         self.n = geo.direction
         self.bonds = model.mesh.topology.bonds
+        self.n_points = model.mesh.n_points
         self.h = None  # (n_bonds, 3): tension per unit xx, yy and xy stress
 
     # ------------------------------------------------------------------ to override
@@ -178,7 +179,7 @@ class Criterion(ABC):
         e = len(self.bonds)
         dofs = 2 * self.bonds[:, [0, 0, 1, 1]] + np.array([0, 1, 0, 1])
         vals = np.c_[-self.n, self.n]
-        n_dof = 2 * (int(self.bonds.max()) + 1)
+        n_dof = 2 * self.n_points
         return sp.csr_matrix(
             (vals.ravel(), (np.repeat(np.arange(e), 4), dofs.ravel())), shape=(e, n_dof)
         )
