@@ -342,8 +342,9 @@ def write_crack_png(path: str | Path, result, title: str | None = None) -> Path:
     """The crack pattern of a fracture analysis as a PNG, atomically: the body's
     outline, the Voronoi faces of the broken bonds coloured by the order they broke (by
     failure mode, tension / shear / crushing, when faces failed other than in
-    tension), those of softened (cracked, not yet broken) bonds in grey; a crack in a
-    small part of the body is framed."""
+    tension), those of softened (cracked, not yet broken) bonds in grey, or pale in the
+    colour of their mode when faces soften in shear; a crack in a small part of the body
+    is framed."""
     from matplotlib.collections import LineCollection
 
     from . import plot
@@ -358,10 +359,28 @@ def write_crack_png(path: str | Path, result, title: str | None = None) -> Path:
     ax = axes[0, 0]
     ax.add_collection(LineCollection(x[mesh.boundary_edges], colors="k", linewidths=0.8))
     plot.draw_interfaces(ax, mesh, result.model.material_of_triangle)
-    if len(soft):
-        ax.add_collection(LineCollection(soft_faces, colors="0.6", linewidths=0.8))
     modes = _break_modes(result)
-    if len(faces) and any(m != "tension" for m in modes):
+    first = {}
+    for ev in result.events:
+        first.setdefault(ev.bond, ev.mode)
+    soft_modes = [first.get(int(b), "tension") for b in soft]
+    shear_soft = bool(len(soft)) and any(m != "tension" for m in soft_modes)
+    if shear_soft:  # faces softening in shear or crushing: their modes
+        for mode, colour in _MODE_COLOURS.items():
+            sel = [i for i, m in enumerate(soft_modes) if m == mode]
+            if sel:
+                ax.add_collection(
+                    LineCollection(
+                        soft_faces[sel],
+                        colors=colour,
+                        alpha=0.45,
+                        linewidths=0.8,
+                        label=f"{mode} (softening)",
+                    )
+                )
+    elif len(soft):
+        ax.add_collection(LineCollection(soft_faces, colors="0.6", linewidths=0.8))
+    if (len(faces) and any(m != "tension" for m in modes)) or shear_soft:
         for mode, colour in _MODE_COLOURS.items():
             sel = [i for i, m in enumerate(modes) if m == mode]
             if sel:

@@ -296,6 +296,27 @@ def test_the_crack_picture_and_the_vtu_series_show_the_modes(tmp_path):
     assert np.all(mode[crushed] == 3)
 
 
+def test_the_crack_picture_colours_faces_softening_in_shear_by_their_mode(tmp_path, monkeypatch):
+    from matplotlib.collections import LineCollection
+
+    from dvstatic import plot
+
+    res = compress(prism(0.08), max_events=20, gf=1e-3, stop_load_ratio=0.0)
+    assert not len(res.broken) and (res.stiffness < 1).any()
+    labels = []
+    save = plot.save
+
+    def spy(fig, path):
+        labels.extend(
+            c.get_label() for c in fig.axes[0].collections if isinstance(c, LineCollection)
+        )
+        return save(fig, path)
+
+    monkeypatch.setattr(plot, "save", spy)
+    dv.io.write_crack_png(tmp_path / "crack.png", res)
+    assert any(label.endswith("(softening)") for label in labels)
+
+
 # ------------------------------------------------------------------ cracks that close
 def cracked_through():
     """A 2 x 1 CVT plate pulled apart between grips until a crack crosses it."""
