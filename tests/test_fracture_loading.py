@@ -124,7 +124,7 @@ def test_a_sheared_face_teeth_release_gf_shear_of_a_crack_band_one_face_wide():
     triangles' strain) as it fails and ``W`` the elastic energy of its share of the body
     ``sigma : eps l r t / 4``, ``sum_i (d_i - d_i+1) (m_i / m_0)^2 W = (pi / 4) gf_shear
     t r`` (computed here from the recorded state, independently of the loop)."""
-    from dvstatic.crack.sla import BUFFON
+    from dvstatic.crack.energies import BUFFON
     from dvstatic.stress.virial import triangle_strains, triangle_stress
 
     model = prism()

@@ -143,7 +143,7 @@ def softening(hs) -> tuple[list, list]:
     the platen displacement and energy dissipated by then, and what the lattice released
     through the faces that failed in shear or crushing and went through all their
     teeth, against their gf_shear share."""
-    from dvstatic.crack.sla import BUFFON, GF_SHEAR_RATIO, _face
+    from dvstatic.crack.energies import BUFFON, GF_SHEAR_RATIO, face_of
 
     runs = [(hs[0], 0.0), (hs[0], None), (hs[0], 3 * GF_SHEAR_RATIO * GF_PRISM)]
     runs += [(h, None) for h in hs[1:]]
@@ -163,7 +163,7 @@ def softening(hs) -> tuple[list, list]:
         for ev in res.events:
             released[ev.bond] = released.get(ev.bond, 0.0) + ev.released
             first.setdefault(ev.bond, ev)
-        target = BUFFON * value * _face(model) * model.t
+        target = BUFFON * value * face_of(model) * model.t
         through = [
             released[b] / target[b]
             for b in res.broken

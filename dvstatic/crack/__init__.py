@@ -9,9 +9,10 @@ breaking a bond does to the DV/RV force law is in :mod:`dvstatic.lattice.damage`
 """
 
 from .criteria.mohr_coulomb import ucs
+from .energies import GF_SHEAR_RATIO
 from .options import FractureOptions
 from .result import Event, FractureResult, FractureStats, FractureTimings, Snapshot
-from .sla import EQUILIBRIUM_TOL, GF_SHEAR_RATIO, fracture
+from .sla import EQUILIBRIUM_TOL, fracture
 from .strength import Weibull
 
 __all__ = [

@@ -15,8 +15,6 @@ from __future__ import annotations
 import dataclasses
 import inspect
 import logging
-import math
-import numbers
 import time
 
 import numpy as np
@@ -30,29 +28,21 @@ from ..solvers.options import options_docstring
 from .bonds import Bonds, Kept
 from .contact import Contact
 from .control import criterion_parameters, held_problem, reference
-from .criteria import MODES, REGISTRY, criterion_for, per_bond
+from .criteria import MODES, criterion_for
+from .energies import GF_SHEAR_RATIO, fracture_energies, shear_energies
 from .options import FractureOptions
 from .pieces import Pieces, bond_triangles
 from .result import Event, FractureResult, FractureStats, FractureTimings, Snapshot
 from .search import EventSearch
-from .strength import Weibull, smallest_gf
+from .strength import Weibull
 from .updates import UpdatedSolver
 
 log = logging.getLogger(__name__)
 
-__all__ = ["fracture", "EQUILIBRIUM_TOL", "GF_SHEAR_RATIO"]
+__all__ = ["fracture", "EQUILIBRIUM_TOL"]
 
 #: relative residual every recorded state must reach
 EQUILIBRIUM_TOL = 1e-10
-#: a straight crack of length L cuts bonds whose Voronoi faces add up to 4 L / pi on
-#: average (Buffon: sum_e r_e l_e |sin theta_e| / A with sum_e r_e l_e = 2 A and the mean
-#: |sin| 2 / pi): each bond gets this share of gf times its face
-BUFFON = np.pi / 4
-#: ``gf_shear`` when it is not given, in units of ``gf``: the mode II fracture energy of
-#: concrete and rock is often taken as ten times the mode I one (interface and cohesive
-#: crack models of concrete, e.g. Carol, Prat & Lopez 1997; measured ratios run from
-#: about 10 to 25)
-GF_SHEAR_RATIO = 10.0
 #: secant stiffness (relative to the initial one) below which the body is a mechanism
 MECHANISM = 1e-6
 
@@ -116,7 +106,7 @@ def fracture(
     _check_options(model, weibull)
     _check_start(model, start)
     params = criterion_parameters(opts.criterion, cohesion=cohesion, friction_angle=friction_angle)
-    shear_energy = _shear_energies(model, opts.criterion, gf, gf_shear)
+    shear_energy = shear_energies(model, opts.criterion, gf, gf_shear)
     timings: dict[str, float] = {}
     t_start = time.perf_counter()
     problem = Problem.build(model, supports, loads)
@@ -125,7 +115,7 @@ def fracture(
     sp_ = _split(model)
     criterion = criterion_for(opts.criterion, model, sp_)
     s0, s_tension = criterion.prepare(model, ft, weibull, timings, dofs, params)
-    energy = None if gf is None else _energies(model, gf, s_tension)
+    energy = None if gf is None else fracture_energies(model, gf, s_tension)
     energy = (energy, shear_energy)
     _warn_rows(model.mesh)
     fh = None if kept is None else kept.f
@@ -246,74 +236,6 @@ def _warn_rows(mesh: Mesh) -> None:
             "degrees); for fracture, kind='cvt' gives paths free of that bias",
             sampling.kind,
         )
-
-
-def _shear_energies(model, criterion: str, gf, gf_shear):
-    """Energy each bond's teeth release when its face fails in shear or crushing
-    (force x length; None: brittle), from ``gf_shear`` or its default
-    :data:`GF_SHEAR_RATIO` x ``gf``.
-
-    Raises
-    ------
-    InputError
-        ``gf_shear`` for a criterion without shear failure, or a negative one.
-    """
-    if not REGISTRY[criterion].shear:
-        if gf_shear is not None:
-            raise InputError(
-                f"gf_shear is the fracture energy of faces failing in shear or crushing: "
-                f"criterion {criterion!r} fails faces in tension only; give "
-                "criterion='mohr-coulomb' or leave gf_shear out",
-                "gf_shear",
-            )
-        return None
-    if gf_shear is None:
-        if gf is None:
-            return None
-        gfs = GF_SHEAR_RATIO * per_bond(model, gf, "gf")  # gf checked under its own name
-    else:
-        gfs = per_bond(model, gf_shear, "gf_shear", _non_negative)
-    if not np.any(gfs > 0):
-        return None
-    return BUFFON * gfs * model.t * _face(model)
-
-
-def _non_negative(value, name: str) -> None:
-    ok = isinstance(value, numbers.Real) and not isinstance(value, bool)
-    if not ok or not math.isfinite(float(value)) or value < 0:
-        raise InputError(
-            f"{name} must be a finite number >= 0 (0: brittle faces), got {value!r}", name
-        )
-
-
-def _face(model) -> np.ndarray:
-    """The crack face of every bond: its Voronoi side (bounded below on obtuse
-    triangles)."""
-    geo = model.geometry
-    return np.maximum(geo.r, 0.2 * geo.length)
-
-
-def _energies(model, gf, s_tension) -> np.ndarray:
-    """Energy each bond's teeth release (force x length), see :mod:`.strength`.
-
-    Raises
-    ------
-    InputError
-        If ``gf`` is too small for the mesh (a bond would snap back on its own).
-    """
-    face = _face(model)
-    gfb = per_bond(model, gf, "gf")
-    need = smallest_gf(s_tension, model.operator.spring, face, model.t)
-    if np.any(gfb <= need):
-        e = int(np.argmax(need / gfb))
-        raise InputError(
-            f"gf = {gfb[e]:.4g} is too small for this mesh: bond {e} would store more "
-            f"elastic energy at its strength than gf gives its face; use gf > "
-            f"{float(np.max(need)):.4g} or a finer mesh (the bound is about "
-            "ft^2 h / (2 E) and falls with the bond length h)",
-            "gf",
-        )
-    return BUFFON * gfb * model.t * face
 
 
 class _Analysis(EventSearch):
