@@ -513,3 +513,7 @@ def test_a_run_with_faces_softening_in_shear_goes_on_with_mohr_coulomb_only():
     with pytest.raises(dv.InputError) as info:
         dv.fracture(model, platens(model.mesh), None, ft=FT, gf=1e-3, start=first)
     assert info.value.param == "criterion"
+    with pytest.raises(dv.InputError) as info:
+        compress(model, max_events=1, start=first, friction_angle=PHI + 5.0, **kw)
+    assert info.value.param == "friction_angle"
+    compress(model, max_events=1, start=first, cohesion=1.1 * C, **kw)  # intact bonds only

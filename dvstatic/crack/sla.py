@@ -77,6 +77,24 @@ def _check_start(model, start) -> None:
         raise InputError("start: the run was made on another mesh than the model's", "start")
 
 
+def _same_friction(state: dict, criterion, sheared: np.ndarray) -> None:
+    """Refuse to go on softening sheared faces with another friction angle: their
+    thresholds are values of the earlier run's Coulomb measure ``s tau + sigma_n tan``."""
+    old, new = state.get("tan"), getattr(criterion, "tan", None)
+    if not np.any(sheared) or old is None or new is None:
+        return
+    if not np.allclose(old[sheared], new[sheared], rtol=1e-12, atol=0.0):
+        k = int(np.flatnonzero(sheared & ~np.isclose(old, new, rtol=1e-12, atol=0.0))[0])
+        raise InputError(
+            f"start: the earlier run softened {int(sheared.sum())} face(s) in shear or "
+            f"crushing with friction_angle {np.degrees(np.arctan(old[k])):.6g} deg at bond "
+            f"{k}, got {np.degrees(np.arctan(new[k])):.6g} deg: their thresholds are values "
+            f"of Coulomb's measure with the earlier angle; go on with the same "
+            f"friction_angle",
+            "friction_angle",
+        )
+
+
 def _check_options(model, weibull) -> None:
     if not isinstance(model, VoronoiModel):
         raise TypeError(f"model must be a DV or RV model, got {type(model).__name__}")
@@ -203,7 +221,8 @@ fracture.__doc__ = f"""Quasi-static fracture by bond breaking, event by event (s
         Go on from the end of this earlier run on the same mesh (its cracked and broken
         bonds, their teeth, the faces cracked in tension that can close) under new
         supports and loads: e.g. crack in tension, then compress. Intact bonds take
-        the strengths of the new problem.
+        the strengths of the new problem; faces softening in shear or crushing need
+        the same criterion and ``friction_angle``.
     options : FractureOptions, optional
         All options at once; keywords given as well override it.
 {options_docstring(cls=FractureOptions)}
@@ -279,9 +298,15 @@ class _Analysis(EventSearch):
                 f"criterion='mohr-coulomb' (got {self.criterion.name!r})",
                 "criterion",
             )
+        _same_friction(state, self.criterion, sheared)
         self.bonds.load(state)
         self.contact.cracked[:] = state["cracked"]
         self.initial = self.bonds.d.copy()
+
+    def _state(self) -> dict:
+        """The bonds' state for ``start=``, with the friction their measures used."""
+        tan = getattr(self.criterion, "tan", None)
+        return {**self.bonds.state(self.contact.cracked), "tan": tan}
 
     @property
     def solved(self) -> np.ndarray:
@@ -421,7 +446,7 @@ class _Analysis(EventSearch):
             stiffness=self.bonds.d.copy(),
             broken=np.array(self.broken, dtype=np.int64),
             initial=self.initial,
-            bond_state=self.bonds.state(self.contact.cracked),
+            bond_state=self._state(),
             snapshots=self.snaps.states(),
             stop_reason=reason,
             message=message,
