@@ -21,6 +21,13 @@ def _model_line(md: dict) -> str:
     if md["calibration"] == "relaxed":
         txt += f" from the {md['calibration_source']}, {md['calibration_seconds']:.2f} s"
     txt += f"; bonds {md['bonds']})"
+    classes = md.get("calibration_classes")
+    if classes:  # k_n, nu_m above: the largest class's
+        sp = classes["spread"]
+        txt += (
+            f"; the mesh mixes micro-structures: calibrated in {len(sp)} classes of local "
+            f"spread {min(sp):.3f} to {max(sp):.3f} (k_n, nu_m of the largest)"
+        )
     for name, m in md.get("materials", {}).items():
         txt += f"; {name}: E = {m['E']:g}, nu = {m['nu']:g}"
     return txt

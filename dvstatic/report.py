@@ -252,6 +252,19 @@ def _model_summary(model) -> dict:
         "stabilised": model.micro.stabilised,
         "clipped_fraction": model.clipped_fraction,
     }
+    field = model.micro_field
+    if field is not None:  # a mesh that mixes micro-structures, calibrated class by class
+        c = field.classes
+        out["calibration_seconds"] = sum(
+            float((m.details or {}).get("seconds", 0.0)) for m in field.micros.values()
+        )
+        out["calibration_classes"] = {
+            "spread": c.spread.tolist(),
+            "triangles": np.bincount(c.of_triangle, minlength=c.n_classes).tolist(),
+            "k_n": [field.micros[k].k_n for k in sorted(field.micros)],
+            "nu_m": [field.micros[k].nu_m for k in sorted(field.micros)],
+            "pairs": [list(k) for k in sorted(field.micros)],
+        }
     if model.materials:
         out["materials"] = {
             name: {"E": m.E, "nu": m.nu, "k_n": micro.k_n, "nu_m": micro.nu_m}

@@ -234,23 +234,6 @@ def test_a_graded_mesh_without_recipe_is_calibrated_by_its_cells_not_its_grading
     assert imported.nu_m == pytest.approx(with_recipe.nu_m, abs=0.02)
 
 
-def test_a_mesh_that_mixes_micro_structures_is_warned_about(caplog):
-    from scipy.spatial import Delaunay
-
-    a = dv.mesh.rectangle(1, 1, 0.05, kind="lattice").points
-    b = dv.mesh.rectangle(1, 1, 0.05, kind="random", seed=3).points + [1.0, 0.0]
-    pts = np.unique(np.round(np.vstack([a, b]), 9), axis=0)
-    tri = Delaunay(pts).simplices
-    x = pts[tri]
-    area = (x[:, 1, 0] - x[:, 0, 0]) * (x[:, 2, 1] - x[:, 0, 1]) - (x[:, 1, 1] - x[:, 0, 1]) * (
-        x[:, 2, 0] - x[:, 0, 0]
-    )
-    mesh = dv.Mesh(pts, tri[np.abs(area) > 1e-12])
-    with caplog.at_level(logging.WARNING, logger="dvstatic.lattice.calibration.relaxed"):
-        dv.DV(mesh, E, NU)
-    assert "mixes micro-structures" in caplog.text
-
-
 def test_cook_membrane_stresses_on_slanted_straight_edges():
     """Straight edges that are not axis-aligned (Cook's membrane) are not mistaken for
     holes, and the circle fit stays well posed there (it used to be singular); away

@@ -203,12 +203,14 @@ class VoronoiModel:
         ``closed`` cracks (bool, n_bonds) with their whole spring. A model like any
         other: ``dv.solve``, ``Solution.stress()`` and the writers take it."""
         micros = self.micros
-        return dataclasses.replace(
+        out = dataclasses.replace(
             self,
             calibration=micros if len(micros) > 1 else micros[0],
             damage=stiffness,
             closed=closed,
         )
+        object.__setattr__(out, "micro_field", self.micro_field)  # the cached_property
+        return out
 
     def _check_calibration(self) -> None:
         cal = self.calibration
@@ -271,13 +273,22 @@ class VoronoiModel:
             return (self.calibration,)
         if isinstance(self.calibration, tuple):
             return self.calibration
+        field = self.micro_field
+        if field is not None:  # the largest class of every material, for the record
+            return tuple(self._largest_class(field, k) for k in range(len(self.all_materials)))
         return tuple(self._calibrate(m) for m in self.all_materials)
 
-    def _calibrate(self, material: Elastic) -> calibration.MicroParameters:
+    def _largest_class(self, field, material: int) -> calibration.MicroParameters:
+        mine = field.classes.of_triangle[self.material_of_triangle == material]
+        if not len(mine):
+            return self._calibrate(self.all_materials[material])
+        return field.micros[(material, int(np.bincount(mine).argmax()))]
+
+    def _calibrate(self, material: Elastic, spread=None) -> calibration.MicroParameters:
         E2, nu2 = material.in_plane
         if self.calibration == "relaxed":
             try:
-                return calibration.relaxed(self.kind, self.mesh, E2, nu2, self.bonds)
+                return calibration.relaxed(self.kind, self.mesh, E2, nu2, self.bonds, spread=spread)
             except CalibrationError as exc:
                 if material.plane == "stress":
                     raise
@@ -287,6 +298,36 @@ class VoronoiModel:
                     "nu",
                 ) from None
         return calibration.paper(self.kind, self.mesh, self.geometry, E2, nu2, self.bond_weight)
+
+    @cached_property
+    def micro_field(self) -> calibration.MicroField | None:
+        """Micro-parameters triangle by triangle where the mesh mixes micro-structures
+        (a mesh without recipe whose regions differ in local spread, relaxed
+        calibration: each class of local spread calibrated on its own sample,
+        :mod:`dvstatic.lattice.calibration.classes`); None where :attr:`micros`, one
+        per material, serve (the usual case). :attr:`micros` then hold the
+        calibration of every material's largest class, for the record."""
+        if not (isinstance(self.calibration, str) and self.calibration == "relaxed"):
+            return None
+        classes = calibration.spread_classes(self.mesh)
+        if classes is None:
+            return None
+        field = calibration.calibrate_classes(
+            classes,
+            self.material_of_triangle,
+            lambda mat, spread: self._calibrate(self.all_materials[mat], spread),
+        )
+        log.info("%s", field.describe())
+        return field
+
+    def _triangle_constants(self) -> tuple[np.ndarray, np.ndarray]:
+        """Every triangle's ``k_n`` and ``nu_m``, shape (M,) each."""
+        field = self.micro_field
+        if field is not None:
+            return field.k_n, field.nu_m
+        mat = self.material_of_triangle
+        k_n = np.array([m.k_n for m in self.micros])[mat]
+        return k_n, np.array([m.nu_m for m in self.micros])[mat]
 
     def set_micro(self, micro) -> None:
         """Adopt micro-parameters computed elsewhere (the distributed engine sums the
@@ -319,15 +360,15 @@ class VoronoiModel:
     def operator(self) -> LatticeOperator:
         """Forces and matrices of this lattice (its calibrated stiffnesses, times the
         thickness; stabilised couplings clipped per triangle)."""
-        k_n = np.array([m.k_n for m in self.micros])
-        nu_m = np.array([m.nu_m for m in self.micros])
         mat = self.material_of_triangle
-        if len(self.micros) == 1:
-            spring = self.t * k_n[0] * self.bond_weight
-            coupling = np.full(self.mesh.n_triangles, self.t * k_n[0] * nu_m[0])
+        if len(self.micros) == 1 and self.micro_field is None:
+            k_n, nu_m = self.micro.k_n, self.micro.nu_m
+            spring = self.t * k_n * self.bond_weight
+            coupling = np.full(self.mesh.n_triangles, self.t * k_n * nu_m)
         else:
-            spring = self.t * self.bond_weight * _bond_mix(self.geometry, self.mesh, k_n[mat])
-            coupling = self.t * k_n[mat] * nu_m[mat]
+            k_tri, nu_tri = self._triangle_constants()
+            spring = self.t * self.bond_weight * _bond_mix(self.geometry, self.mesh, k_tri)
+            coupling = self.t * k_tri * nu_tri
         stab = np.array([m.stabilised for m in self.micros])[mat]
         if stab.any():
             modes = triangle_modes(self.mesh, spring, self.barycentric_images)
@@ -344,8 +385,7 @@ class VoronoiModel:
     def clipped_fraction(self) -> float:
         """Fraction of the triangles whose coupling the stabilisation reduced (0 for
         the paper's calibration)."""
-        k_n = np.array([m.k_n for m in self.micros])[self.material_of_triangle]
-        nu_m = np.array([m.nu_m for m in self.micros])[self.material_of_triangle]
+        k_n, nu_m = self._triangle_constants()
         full = self.t * k_n * nu_m
         return float(np.mean(~np.isclose(self.operator.coupling, full, rtol=1e-12, atol=0)))
 

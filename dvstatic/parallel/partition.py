@@ -229,6 +229,21 @@ def patch_bond_weights(model, lay: Layout) -> np.ndarray:
     return w[order[pos]]
 
 
+def patch_triangles(mesh: Mesh, lay: Layout) -> np.ndarray:
+    """The global index of every triangle of the patch, shape (n_patch_triangles,): found
+    through the bond of its two lowest nodes and the node opposite it."""
+    n = mesh.n_points
+    topo = mesh.topology
+    gb = np.sort(topo.bonds, axis=1).astype(np.int64)
+    key = gb[:, 0] * n + gb[:, 1]
+    order = np.argsort(key)
+    pt = np.sort(lay.local_nodes[lay.patch.triangles], axis=1).astype(np.int64)
+    bond = order[np.searchsorted(key, pt[:, 0] * n + pt[:, 1], sorter=order)]
+    first, second = topo.bond_tris[bond, 0], topo.bond_tris[bond, 1]
+    has = np.any(mesh.triangles[first] == pt[:, 2:3], axis=1)
+    return np.where(has, first, second)
+
+
 def owned_loads(mesh: Mesh, loads, lay: Layout, thickness: float = 1.0) -> np.ndarray:
     """External forces on the owned dofs, shape (2 n_owned,)."""
     return nodal_forces(mesh, loads, nodes=lay.local_nodes[: lay.n_owned], thickness=thickness)

@@ -32,6 +32,7 @@ from .partition import (
     owned_loads,
     patch_bond_weights,
     patch_memory,
+    patch_triangles,
 )
 
 __all__ = ["DEFAULT_OPTIONS", "PREFIX", "solve"]
@@ -290,6 +291,9 @@ def _prepare(PETSc, comm, model, supports, loads, opts, seconds: dict) -> _Setup
         materials={k: (m.E, m.nu) for k, m in model.materials.items()},
     )
     object.__setattr__(pm, "bond_weight", patch_bond_weights(model, lay))  # cached
+    if model.micro_field is not None:  # a mesh calibrated class by class: its triangles'
+        field = model.micro_field.restricted(patch_triangles(model.mesh, lay))
+        object.__setattr__(pm, "micro_field", field)  # the cached_property
     cnew = 2 * lay.new_of[dofs // 2] + dofs % 2
     order = np.argsort(cnew)
     cdofs, cvals = cnew[order], values[order]

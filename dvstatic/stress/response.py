@@ -50,7 +50,9 @@ def companion(model: VoronoiModel, material: int) -> VoronoiModel:
             model.mesh,
             m.E,
             m.nu,
-            calibration=model.micros[material],
+            # a mesh calibrated class by class: the companion's own classes, of
+            # this material alone (the same samples, cached)
+            calibration="relaxed" if model.micro_field is not None else model.micros[material],
             bonds=model.bonds,
             plane=model.plane,
             thickness=model.thickness,

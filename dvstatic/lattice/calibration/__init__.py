@@ -9,6 +9,7 @@
 """
 
 from .base import CALIBRATIONS, MicroParameters, Moments
+from .classes import MicroField, SpreadClasses, calibrate_classes, spread_classes
 from .paper import (
     admissible_nu,
     moment_sums,
@@ -44,4 +45,8 @@ __all__ = [
     "relaxed_moduli",
     "rev_for_spread",
     "sample_for",
+    "MicroField",
+    "SpreadClasses",
+    "calibrate_classes",
+    "spread_classes",
 ]

@@ -139,9 +139,9 @@ def local_spread(mesh: Mesh) -> float:
 
 
 #: a mesh whose local spread varies by more than this between its regions (10th to
-#: 90th percentile of the node field) is calibrated as one micro-structure with a
-#: warning (measured: 0.07 on a gmsh plate graded 0.04 -> 0.24, 0.40 on a lattice
-#: beside random points)
+#: 90th percentile of the node field) mixes micro-structures: the models calibrate it
+#: class by class (:mod:`.classes`; measured: 0.07 on a gmsh plate graded 0.04 -> 0.24,
+#: 0.40 on a lattice beside random points)
 MIXED_SPREAD = 0.15
 
 
@@ -158,28 +158,6 @@ def spread_field(mesh: Mesh) -> np.ndarray:
     for _ in range(2):
         node = (step @ node) / deg
     return np.sqrt(node)
-
-
-def _warn_if_mixed(mesh: Mesh, used: float) -> None:
-    """A warning when the mesh's regions differ in micro-structure (a structured region
-    beside an unstructured one): one calibration serves them all."""
-    field = spread_field(mesh)
-    lo, hi = np.percentile(field, [10, 90])
-    if hi - lo <= MIXED_SPREAD:
-        return
-    where_lo = mesh.points[int(np.argmin(field))]
-    where_hi = mesh.points[int(np.argmax(field))]
-    log.warning(
-        "the mesh mixes micro-structures: its local bond-length spread runs from %.3f "
-        "(near (%.3g, %.3g)) to %.3f (near (%.3g, %.3g)); the relaxed calibration uses "
-        "one for all (%.3f): expect errors of a few percent where the cells differ from "
-        "it (a mesh of one kind, or a graded CVT from dv.mesh.generate, avoids this)",
-        field.min(),
-        *where_lo,
-        field.max(),
-        *where_hi,
-        used,
-    )
 
 
 def rev_for_spread(sigma_l: float, n_points: int = REV_POINTS, seed: int = 0) -> Mesh:
@@ -235,8 +213,6 @@ def sample_for(mesh: Mesh, n_points: int = REV_POINTS, seed: int = 0, spread=Non
             _SAMPLES.put(key, rev)
         return rev, "recipe", key
     raw = local_spread(mesh) if spread is None else float(spread)
-    if spread is None:
-        _warn_if_mixed(mesh, raw)
     # quantised to 0.005 (nu_eff moves by < 1e-3): meshes of the same statistics share
     sig = round(raw / SPREAD_STEP) * SPREAD_STEP
     key = ("local spread", round(sig, 4), n_points, seed)
