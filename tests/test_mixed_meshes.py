@@ -6,6 +6,7 @@ import pytest
 from scipy.spatial import Delaunay
 
 import dvstatic as dv
+from dvstatic import parallel as distributed
 from dvstatic.lattice.calibration import relaxed, spread_classes
 
 E, NU = 1e4, 0.3
@@ -112,3 +113,35 @@ def test_the_summary_says_the_mesh_was_calibrated_by_class():
     assert len(classes["spread"]) == m.micro_field.classes.n_classes
     assert sum(classes["triangles"]) == m.mesh.n_triangles
     assert "mixes micro-structures" in _model_line(md)
+
+
+@pytest.mark.skipif(
+    not distributed.available(),
+    reason="petsc4py is not installed: run scripts/install_petsc.sh (the dvstatic[petsc] extra)",
+)
+def test_petsc_solves_a_mesh_calibrated_by_class_as_the_direct_solver_does():
+    m = dv.DV(mixed(), E, NU)
+    sup = [dv.Fix("left", x=0), dv.Fix(at=(0, 0), y=0)]
+    loads = [dv.Traction("right", (1.0, 0.0))]
+    sol = dv.solve(m, sup, loads, solver="petsc", rtol=1e-12)
+    ref = dv.solve(m, sup, loads, solver="direct")
+    assert sol.info.solver == "petsc" and sol.info.converged
+    assert np.max(np.abs(sol.u - ref.u)) <= 1e-8 * np.max(np.abs(ref.u))
+
+
+def test_patch_rows_equal_global_rows_on_a_mesh_calibrated_by_class():
+    """The patches take their triangles' k_n and nu_m (the distributed engine's way)."""
+    from dvstatic.parallel.partition import layout, patch_triangles
+
+    mesh = mixed()
+    model = dv.DV(mesh, E, NU)
+    K = model.stiffness()
+    for rank in range(2):
+        lay = layout(mesh, rank, 2)
+        pm = dv.DV(lay.patch, E, NU, calibration=model.micro)
+        object.__setattr__(
+            pm, "micro_field", model.micro_field.restricted(patch_triangles(mesh, lay))
+        )
+        gd = np.stack([2 * lay.local_nodes, 2 * lay.local_nodes + 1], axis=1).reshape(-1)
+        n2 = 2 * lay.n_owned
+        assert abs(pm.stiffness()[:n2] - K[gd[:n2]][:, gd]).max() < 1e-9 * abs(K).max()

@@ -196,8 +196,8 @@ def micro_parameters(model, lay: Layout, allreduce) -> tuple:
     """
     if allreduce(np.array([0.0 if model.is_calibrated else 1.0]))[0] == 0.0:
         return model.micros
-    if not isinstance(model.calibration, str):
-        return model.micros
+    if not isinstance(model.calibration, str) or model.micro_field is not None:
+        return model.micros  # given, or a mesh calibrated class by class (replicated)
     geom = _geometry.of(lay.patch)
     own_b = owned_bonds(lay)
     constants = [m.in_plane for m in model.all_materials]
