@@ -87,7 +87,9 @@ class FESolution:
         ``n_dof``, ``n_elements``, ``lame``, ``load_resultant`` (total applied force),
         ``seconds`` per stage (:class:`FETimings`: mesh, assembly, solve, total).
     basis : skfem.Basis
-        The vector basis (for your own post-processing with scikit-fem).
+        The vector basis on every element (for your own post-processing with
+        scikit-fem; built on first use: its quadrature data are about 250 MB at 7e4 P2
+        elements, which the solve does not need).
     x : ndarray
         The dof vector of ``basis``.
     fe_mesh : FEMesh
@@ -101,15 +103,25 @@ class FESolution:
     order: int
     refine: int
     info: FEInfo
-    basis: object
     x: np.ndarray
     fe_mesh: FEMesh
     lame: tuple
 
+    @cached_property
+    def basis(self):
+        import skfem
+
+        return skfem.Basis(self.fe_mesh.skfem, _vector_element(self.order))
+
+    @cached_property
+    def _dofs(self):
+        """The vector basis on one element: the dof numbering without quadrature data."""
+        return _dof_basis(self.fe_mesh, self.order)
+
     def evaluate(self, points) -> np.ndarray:
         """Displacement at arbitrary points inside the mesh, shape (n, 2)."""
         p = _points(points)
-        v = probe_matrix(self.basis, self.fe_mesh, p) @ self.x
+        v = probe_matrix(self._dofs, self.fe_mesh, p) @ self.x
         n = len(p)
         return np.c_[v[:n], v[n:]]
 
@@ -124,12 +136,14 @@ class FESolution:
         import skfem
 
         lam, mu, lzz = (v[:, None] for v in self.lame)
-        g = self.basis.interpolate(self.x).grad  # (2, 2, elements, quadrature points)
-        exx, eyy, exy = g[0, 0], g[1, 1], 0.5 * (g[0, 1] + g[1, 0])
+        el = skfem.ElementTriP1() if self.order == 1 else skfem.ElementTriP2()
+        sb = skfem.Basis(self.fe_mesh.skfem, el)
+        # each displacement component as a scalar field of sb (a quarter of the vector
+        # basis's quadrature data): its gradient (2, elements, quadrature points)
+        g = [sb.interpolate(_component(self._dofs, sb, self.x, c)).grad for c in range(2)]
+        exx, eyy, exy = g[0][0], g[1][1], 0.5 * (g[0][1] + g[1][0])
         tr = exx + eyy
         comps = (lam * tr + 2 * mu * exx, lam * tr + 2 * mu * eyy, 2 * mu * exy, lzz * tr)
-        el = skfem.ElementTriP1() if self.order == 1 else skfem.ElementTriP2()
-        sb = self.basis.with_element(el)
         return sb, _l2_project(sb, comps)
 
     def stress(self, points) -> np.ndarray:
@@ -246,16 +260,17 @@ def solve(
     refine = check_int("refine", refine, minimum=0, maximum=MAX_REFINE)
     t0 = time.perf_counter()
     fe = build(mesh, refine, order)
-    elem = skfem.ElementVector(skfem.ElementTriP1() if order == 1 else skfem.ElementTriP2())
-    basis = skfem.Basis(fe.skfem, elem)
+    elem = _vector_element(order)
+    basis = _dof_basis(fe, order)  # the dof bookkeeping without quadrature data
     t1 = time.perf_counter()
     lame = _element_lame(mesh, fe, table)
-    K = t * _stiffness(fe, elem, lame[:2])
+    K = t * _stiffness(fe, elem, lame[:2], basis.N)
     f = _load_vector(mesh, fe, elem, basis, loads, t)
     D, vals = _prescribed(mesh, fe, basis, supports)
     x = np.zeros(basis.N)
     x[D] = vals
     A, b, x_free, free = skfem.condense(K, f, x=x, D=D)
+    del K  # A is a copy
     t2 = time.perf_counter()
     comp = np.zeros(basis.N, dtype=np.int8)
     comp[basis.nodal_dofs[1]] = 1
@@ -277,7 +292,7 @@ def solve(
         iterations=its,
     )
     log.info("FE P%d refine=%d: %d dof in %.3f s", order, refine, basis.N, t3 - t0)
-    return FESolution(mesh, u, order, refine, info, basis, x, fe, lame)
+    return FESolution(mesh, u, order, refine, info, x, fe, lame)
 
 
 def _materials(mesh: Mesh, default: Elastic, materials) -> list[Elastic]:
@@ -315,45 +330,75 @@ def _lame(m: Elastic) -> tuple[float, float, float]:
     return lam, mu, lam
 
 
-#: elements per chunk of the FE stiffness assembly (P2 refined once on the
-#: plate_with_hole example, 1.1e5 elements: 1.7 s in chunks against 4.0 s in one call,
-#: whose quadrature arrays dominate the peak memory)
+#: elements per chunk of the FE stiffness assembly (each chunk's basis holds its
+#: quadrature data: 12 P2 gradients at 6 points, about 35 MB per 2e4 elements)
 ASSEMBLY_CHUNK = 20_000
 
 
-def _stiffness(fe: FEMesh, elem, per_element) -> sp.csr_matrix:
-    """The elasticity stiffness, assembled over chunks of :data:`ASSEMBLY_CHUNK`
-    elements (each with its own basis) and summed."""
+def _dof_basis(fe: FEMesh, order: int):
+    """The vector basis on one element: global dof numbering, no quadrature data."""
     import skfem
 
-    n = fe.skfem.t.shape[1]
-    K = None
+    return skfem.Basis(fe.skfem, _vector_element(order), elements=np.array([0]))
+
+
+def _component(vector, scalar, x: np.ndarray, c: int) -> np.ndarray:
+    """Component ``c`` of the vector dofs ``x`` as dofs of the scalar basis."""
+    out = np.zeros(scalar.N)
+    out[scalar.nodal_dofs[0]] = x[vector.nodal_dofs[c]]
+    if scalar.facet_dofs.size:
+        out[scalar.facet_dofs[0]] = x[vector.facet_dofs[c]]
+    return out
+
+
+def _vector_element(order: int):
+    import skfem
+
+    return skfem.ElementVector(skfem.ElementTriP1() if order == 1 else skfem.ElementTriP2())
+
+
+def _stiffness(fe: FEMesh, elem, per_element, n_dof: int) -> sp.csr_matrix:
+    """The elasticity stiffness ``int lambda tr(e_u) tr(e_v) + 2 mu e_u : e_v``,
+    shape (N, N): the element matrices from each chunk's basis gradients in one
+    product (scikit-fem's form assembly calls a kernel per pair of basis functions),
+    their upper triangles gathered as one COO array and summed once (plate_with_hole
+    refined once, 6.9e4 P2 elements: 3.5 s and 580 MB peak before, pairs of chunks
+    summed through CSR)."""
+    import scipy.sparse as sp
+    import skfem
+
+    lam, mu = per_element
+    n, nb = fe.skfem.t.shape[1], len(elem.doflocs)
+    iu, ju = np.triu_indices(nb)
+    rows = np.empty((len(iu), n), dtype=np.int32 if n_dof < 2**31 else np.int64)
+    cols, data = np.empty_like(rows), np.empty((len(iu), n))
     for start in range(0, n, ASSEMBLY_CHUNK):
         idx = np.arange(start, min(n, start + ASSEMBLY_CHUNK))
         part = skfem.Basis(fe.skfem, elem, elements=idx)
-        fields = _fields(part, tuple(v[idx] for v in per_element))
-        k = skfem.asm(_elasticity(), part, **fields).tocsr()
-        K = k if K is None else K + k
-    return K
+        ke = _element_matrices(part, lam[idx], mu[idx])
+        rows[:, idx], cols[:, idx] = part.element_dofs[iu], part.element_dofs[ju]
+        data[:, idx] = ke[iu, ju]
+    upper = sp.csr_matrix((data.ravel(), (rows.ravel(), cols.ravel())), shape=(n_dof, n_dof))
+    del rows, cols, data
+    return (upper + upper.T - sp.diags(upper.diagonal())).tocsr()
 
 
-def _fields(basis, per_element) -> dict:
-    """Per-element constants as quadrature-point fields (n_elements, n_points)."""
-    nqp = basis.X.shape[1]
-    lam, mu = per_element
-    return {"lam": np.repeat(lam[:, None], nqp, axis=1), "mu": np.repeat(mu[:, None], nqp, axis=1)}
-
-
-def _elasticity():
-    import skfem
-    from skfem.helpers import ddot, sym_grad, trace
-
-    @skfem.BilinearForm
-    def form(u, v, w):
-        eu, ev = sym_grad(u), sym_grad(v)
-        return w.lam * trace(eu) * trace(ev) + 2.0 * w.mu * ddot(eu, ev)
-
-    return form
+def _element_matrices(part, lam: np.ndarray, mu: np.ndarray) -> np.ndarray:
+    """Element stiffness matrices of a basis chunk, shape (nb, nb, n_elements): at each
+    quadrature point ``B^T C B dx`` with the strain-displacement matrix ``B`` (strain
+    components xx, yy, sqrt(2) xy, so that ``e_u : e_v`` is a dot product) from the
+    chunk's basis gradients."""
+    g = np.stack([b[0].grad for b in part.basis], axis=-1)  # (2, 2, e, q, nb)
+    ke = np.zeros((g.shape[2], g.shape[4], g.shape[4]))
+    for q in range(g.shape[3]):
+        B = np.stack(
+            [g[0, 0, :, q], g[1, 1, :, q], np.sqrt(0.5) * (g[0, 1, :, q] + g[1, 0, :, q])], 1
+        )
+        w = part.dx[:, q]
+        CB = 2.0 * (mu * w)[:, None, None] * B
+        CB[:, :2] += ((lam * w)[:, None] * (B[:, 0] + B[:, 1]))[:, None, :]
+        ke += np.matmul(B.transpose(0, 2, 1), CB)
+    return ke.transpose(1, 2, 0)
 
 
 def _resultant(basis, f: np.ndarray) -> tuple[float, float]:
@@ -415,7 +460,7 @@ def _body_basis(mesh: Mesh, fe: FEMesh, basis, load: BodyForce):
     import skfem
 
     if load.region is None:
-        return basis
+        return skfem.Basis(fe.skfem, basis.elem)
     if load.region not in mesh.regions:
         known = ", ".join(repr(k) for k in mesh.regions) or "none"
         raise InputError(

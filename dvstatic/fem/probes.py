@@ -117,7 +117,7 @@ def probe_matrix(basis, fe: FEMesh, p: np.ndarray):
         phis = np.array(
             [basis.elem.gbasis(basis.mapping, pts, k, tind=cells)[0] for k in range(basis.Nbfun)]
         ).reshape(basis.Nbfun, comp, rest.size)
-        dofs = basis.element_dofs[:, cells].reshape(-1)  # a vector function has one component
+        dofs = basis.dofs.element_dofs[:, cells].reshape(-1)  # a vector function has one component
         for c in range(comp):
             rows.append(np.tile(c * n + rest, basis.Nbfun))
             cols.append(dofs)
