@@ -187,7 +187,7 @@ def test_large_fe_systems_are_solved_by_amg_cg_as_directly(monkeypatch):
 
 
 @pytest.mark.parametrize("order", [1, 2])
-def test_stiffness_equals_scikit_fem_form_assembly(order):
+def test_stiffness_equals_scikit_fem_form_assembly(order, monkeypatch):
     """The vectorised element matrices equal scikit-fem's form assembly (curved P2
     geometry at a hole, per-element Lame constants, several chunks) to rounding."""
     import skfem
@@ -214,14 +214,8 @@ def test_stiffness_equals_scikit_fem_form_assembly(order):
     ref = skfem.asm(
         form, basis, lam=np.repeat(lam[:, None], nq, 1), mu=np.repeat(mu[:, None], nq, 1)
     )
-    import dvstatic.fem as fem_module
-
-    chunk = fem_module.ASSEMBLY_CHUNK
-    fem_module.ASSEMBLY_CHUNK = max(1, n // 3)  # several chunks
-    try:
-        K = _stiffness(fe, elem, (lam, mu), basis.N)
-    finally:
-        fem_module.ASSEMBLY_CHUNK = chunk
+    monkeypatch.setattr(fem, "ASSEMBLY_CHUNK", max(1, n // 3))  # several chunks
+    K = _stiffness(fe, elem, (lam, mu), basis.N)
     diff = abs(K - ref).max()
     assert diff <= 1e-12 * abs(ref).max()
     assert abs(K - K.T).max() == 0.0
