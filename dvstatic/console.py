@@ -74,6 +74,7 @@ def print_summary(sc, d: dict, written: list[Path]) -> None:
             f"{m['nodes']} nodes ({m['kind']}), {m['bonds']} bonds, sigma_L = {m['sigma_L']:.4f}",
         ),
         ("model", _model_line(md)),
+        *[("calibration range", f["message"]) for f in md.get("calibration_flags", ())],
         ("solver", _solver_line(s)),
         ("max |u|", f"{d['max_displacement']:.6e}"),
     ]
@@ -83,7 +84,8 @@ def print_summary(sc, d: dict, written: list[Path]) -> None:
             if s.get("equilibrium", True)
             else "the last iterate of a step that did not converge, not in equilibrium"
         )
-        rows.insert(4, ("NOT converged", f"load factor {s['load_factor']:.4g} of 1: {state}"))
+        after = [r[0] for r in rows].index("solver") + 1
+        rows.insert(after, ("NOT converged", f"load factor {s['load_factor']:.4g} of 1: {state}"))
     if "strain_energy" in d:
         rows.append(("energy", f"{d['strain_energy']:.6e}"))
     for key, r in d["reactions"].items():

@@ -265,6 +265,10 @@ def _model_summary(model) -> dict:
             "nu_m": [field.micros[k].nu_m for k in sorted(field.micros)],
             "pairs": [list(k) for k in sorted(field.micros)],
         }
+    if model.calibration_flags:  # parts outside what their calibration measured
+        out["calibration_flags"] = [
+            {**f.as_dict(), "message": f.message()} for f in model.calibration_flags
+        ]
     if model.materials:
         out["materials"] = {
             name: {"E": m.E, "nu": m.nu, "k_n": micro.k_n, "nu_m": micro.nu_m}

@@ -209,7 +209,8 @@ class VoronoiModel:
             damage=stiffness,
             closed=closed,
         )
-        object.__setattr__(out, "micro_field", self.micro_field)  # the cached_property
+        object.__setattr__(out, "micro_field", self.micro_field)  # the cached_properties
+        object.__setattr__(out, "calibration_flags", self.calibration_flags)
         return out
 
     def _check_calibration(self) -> None:
@@ -320,6 +321,44 @@ class VoronoiModel:
         log.info("%s", field.describe())
         return field
 
+    @cached_property
+    def calibration_flags(self) -> tuple[calibration.QualityFlag, ...]:
+        """The parts of a mesh without recipe whose micro-structure lies outside what
+        their relaxed calibration was measured on (a patch of another local spread, or
+        a spread beyond the samples' reach; :mod:`dvstatic.lattice.calibration.quality`),
+        each logged once as a warning; empty for meshes with a recipe, periodic meshes
+        and given micro-parameters."""
+        s = self.mesh.sampling
+        if (
+            not (isinstance(self.calibration, str) and self.calibration == "relaxed")
+            or self.mesh.is_periodic
+            or (s is not None and s.reproducible)
+        ):
+            return ()
+        field = self.micro_field
+        if field is not None:
+            pair = self.material_of_triangle * field.classes.n_classes
+            pair = pair + field.classes.of_triangle
+            micro_of = {m * field.classes.n_classes + c: v for (m, c), v in field.micros.items()}
+        else:
+            pair = self.material_of_triangle
+            micro_of = dict(enumerate(self.micros))
+        keys = np.array(sorted(micro_of))
+        details = [micro_of[k].details or {} for k in keys]
+        if not all("local_spread_sample" in d for d in details):
+            return ()
+        idx = np.searchsorted(keys, pair)
+        sample = np.array([d["local_spread_sample"] for d in details])[idx]
+        asked = np.array([d.get("local_spread", d["local_spread_sample"]) for d in details])
+        if field is not None:  # a class's spread is its triangles' (a selection):
+            # each region is held against the sample its class was measured on
+            flags = calibration.calibration_flags(self.mesh, sample)
+        else:
+            flags = calibration.calibration_flags(self.mesh, asked[idx], sample)
+        for f in flags:
+            log.warning("calibration: %s", f.message())
+        return flags
+
     def _triangle_constants(self) -> tuple[np.ndarray, np.ndarray]:
         """Every triangle's ``k_n`` and ``nu_m``, shape (M,) each."""
         field = self.micro_field
@@ -361,6 +400,7 @@ class VoronoiModel:
         """Forces and matrices of this lattice (its calibrated stiffnesses, times the
         thickness; stabilised couplings clipped per triangle)."""
         mat = self.material_of_triangle
+        self.calibration_flags  # noqa: B018 (warned once, where the calibration is used)
         if len(self.micros) == 1 and self.micro_field is None:
             k_n, nu_m = self.micro.k_n, self.micro.nu_m
             spring = self.t * k_n * self.bond_weight

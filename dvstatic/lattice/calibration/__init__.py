@@ -18,6 +18,7 @@ from .paper import (
     paper,
     paper_from_moments,
 )
+from .quality import QualityFlag, calibration_flags
 from .relaxed import (
     REV_POINTS,
     SPREAD_STEP,
@@ -49,4 +50,6 @@ __all__ = [
     "SpreadClasses",
     "calibrate_classes",
     "spread_classes",
+    "QualityFlag",
+    "calibration_flags",
 ]

@@ -10,7 +10,12 @@ came out 8 % stiff on the lattice side and 2 % soft on the random side, 5.2 % (L
 P2 on the same triangles. Such a mesh's triangles are sorted into classes of their local
 spread, and each class is calibrated on its own sample (the curves are cached, so
 classes of equal spread in several meshes cost one sample): 1.4 % from P2 on that
-mesh, each side's modulus within 0.6 %.
+mesh, each side's modulus within 0.6 %. A mesh whose percentiles do not differ that
+much but that holds a *patch* of another micro-structure (:func:`.quality.patches`: a
+connected region of at least 100 triangles whose local spread differs from the mesh's
+by more than 0.1) is calibrated by class too: a disc of random points 15 spacings
+across in a regular lattice (23,686 nodes) came out 8 % (DV) and 5 % (RV) soft
+calibrated as the whole mesh, within 0.4 % by class.
 """
 
 from __future__ import annotations
@@ -20,7 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...mesh import Mesh
-from .relaxed import MIXED_SPREAD, relative_lengths, spread_field
+from .quality import patches
+from .relaxed import MIXED_SPREAD, local_spread, relative_lengths, spread_field
 
 __all__ = [
     "CLASS_WIDTH",
@@ -65,14 +71,16 @@ class SpreadClasses:
 
 def spread_classes(mesh: Mesh) -> SpreadClasses | None:
     """The local-spread classes of a mesh without a reproducible recipe that mixes
-    micro-structures; None for a mesh of one micro-structure (or with a recipe, or
-    periodic), which one sample serves."""
+    micro-structures (regions whose spread differs: :data:`.relaxed.MIXED_SPREAD`
+    between the node field's 10th and 90th percentiles, or a patch,
+    :func:`.quality.patches`); None for a mesh of one micro-structure (or with a
+    recipe, or periodic), which one sample serves."""
     s = mesh.sampling
     if (s is not None and s.reproducible) or mesh.is_periodic:
         return None
     node = spread_field(mesh)
     lo, hi = np.percentile(node, [10, 90])
-    if hi - lo <= MIXED_SPREAD:
+    if hi - lo <= MIXED_SPREAD and not patches(mesh, local_spread(mesh)):
         return None
     field = node[mesh.triangles].mean(axis=1)
     width = max(CLASS_WIDTH, float(np.ptp(field)) / MAX_CLASSES * (1 + 1e-9))

@@ -145,9 +145,9 @@ def local_spread(mesh: Mesh) -> float:
 MIXED_SPREAD = 0.15
 
 
-def spread_field(mesh: Mesh) -> np.ndarray:
+def spread_field(mesh: Mesh, rings: int = 2) -> np.ndarray:
     """The local spread around every node, shape (N,): the rms deviation from 1 of the
-    relative lengths (as in :func:`local_spread`) of the bonds within two rings."""
+    relative lengths (as in :func:`local_spread`) of the bonds within ``rings`` rings."""
     b = mesh.topology.bonds
     n = mesh.n_points
     count = np.bincount(b[:, 0], None, n) + np.bincount(b[:, 1], None, n)
@@ -155,7 +155,7 @@ def spread_field(mesh: Mesh) -> np.ndarray:
     node = (np.bincount(b[:, 0], dev2, n) + np.bincount(b[:, 1], dev2, n)) / np.maximum(count, 1)
     step = mesh.topology.ring_step(n)
     deg = np.asarray(step.sum(axis=1)).ravel()
-    for _ in range(2):
+    for _ in range(rings):
         node = (step @ node) / deg
     return np.sqrt(node)
 
@@ -315,7 +315,8 @@ def relaxed(
     -------
     MicroParameters
         ``stabilised=True``; ``details["source"]`` is ``"table"``, ``"recipe"`` or
-        ``"local spread"`` (``details["local_spread"]`` the descriptor),
+        ``"local spread"`` (``details["local_spread"]`` the mesh's descriptor,
+        ``details["local_spread_sample"]`` its sample's),
         ``details["seconds"]`` the time it took (0 for a cached result).
 
     Raises
@@ -335,6 +336,9 @@ def relaxed(
     else:
         hit = (hit[0], hit[1], {**hit[2], "seconds": 0.0, "cached": True})
     nu_m, e_eff, details = hit
+    if details["source"] == "local spread":  # what this mesh asked for (the sample: near)
+        raw = local_spread(mesh) if spread is None else float(spread)
+        details = {**details, "local_spread": raw}
     log.debug(
         "relaxed %s calibration (%s): nu_m %.5f, k_n/E %.5f in %.3f s",
         kind,

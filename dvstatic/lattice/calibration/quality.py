@@ -1,0 +1,242 @@
+"""Where a mesh's micro-structure lies outside what its calibration was measured on.
+
+A mesh without a generator recipe is calibrated on periodic samples of its *local
+spread* (:func:`.relaxed.local_spread`: the spread of the bond lengths relative to the
+local spacing), one sample for the whole mesh or one per class of a mesh that mixes
+micro-structures (:mod:`.classes`). Two things put a part of such a mesh outside what
+its sample measured:
+
+* **a patch of another micro-structure**: a region whose local spread differs from
+  its calibration's by more than :data:`TOLERANCE` (a patch of random points in a
+  regular mesh, too small to make the mesh count as mixed; slivers where a mesher
+  struggled). The relaxed moduli move by about 3 % per 0.1 of spread (a regular
+  lattice calibrated as spread 0.27 came out 8 % stiff, random points as 0.27 2 %
+  soft; validation/mixed_mesh.py);
+* **a spread beyond the samples' reach**: the most irregular sample is a set of random
+  points (local spread 0.365); a mesh (or class) more irregular still (clustered
+  points) is calibrated as random points.
+
+:func:`calibration_flags` finds both; the models log one warning per flag, naming the
+region (or the place) and the descriptor, and keep them in
+``model.calibration_flags`` (the run's JSON: ``model.calibration_flags``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...mesh import Mesh
+from .relaxed import spread_field
+
+__all__ = [
+    "MIN_TRIANGLES",
+    "QUALITY_RINGS",
+    "TOLERANCE",
+    "QualityFlag",
+    "calibration_flags",
+    "patches",
+    "triangle_spread",
+]
+
+#: a region is flagged where its local spread differs from its calibration's by more
+#: than this (about 3 % in the relaxed moduli)
+TOLERANCE = 0.1
+#: the local spread is averaged over this many rings (on random points the node
+#: values then scatter from 0.30 to 0.45 around 0.36, 1st to 99th percentile)
+QUALITY_RINGS = 4
+#: a flagged region has at least this many connected triangles (the noise of the
+#: ring average on random points makes clusters of up to about 50)
+MIN_TRIANGLES = 100
+#: a calibration's spread may exceed its sample's by this much before it counts as
+#: beyond the samples' reach (the samples match spreads to 1 %, quantised to 0.005)
+REACH_MARGIN = 0.02
+
+
+@dataclass(frozen=True)
+class QualityFlag:
+    """A part of a mesh outside what its calibration was measured on.
+
+    Attributes
+    ----------
+    kind : {"patch", "reach"}
+        A region of another local spread, or a spread beyond the samples'.
+    where : str
+        ``"region 'name'"``, ``"the whole mesh"``, ``"class k"`` or
+        ``"triangles around (x, y)"``.
+    triangles : int
+        How many triangles it holds.
+    spread : float
+        Its local spread (``"patch"``: the mean over its triangles of the spread
+        around them; ``"reach"``: the spread its calibration was made for).
+    calibrated : float
+        ``"patch"``: the spread its calibration was made for; ``"reach"``: the spread
+        of the sample that calibration was measured on.
+    box : tuple of float
+        Its bounding box ``(x_min, y_min, x_max, y_max)`` (mesh units).
+    """
+
+    kind: str
+    where: str
+    triangles: int
+    spread: float
+    calibrated: float
+    box: tuple[float, float, float, float]
+
+    def message(self) -> str:
+        """The warning's text."""
+        x0, y0, x1, y1 = self.box
+        box = f"[{x0:.3g}, {x1:.3g}] x [{y0:.3g}, {y1:.3g}]"
+        if self.kind == "reach":
+            return (
+                f"{self.where} ({self.triangles} triangles, {box}): local spread "
+                f"{self.spread:.3f} (bond length over the local spacing) is beyond the most "
+                f"irregular calibration sample's ({self.calibrated:.3f}, random points); "
+                "it is calibrated as random points"
+            )
+        return (
+            f"{self.where} ({self.triangles} triangles, {box}): local spread "
+            f"{self.spread:.3f} (bond length over the local spacing, {QUALITY_RINGS} rings) "
+            f"against {self.calibrated:.3f} that its calibration was made for; its moduli "
+            "may be off by about 3 % per 0.1 of difference"
+        )
+
+    def as_dict(self) -> dict:
+        """The flag as JSON-ready values."""
+        return {
+            "kind": self.kind,
+            "where": self.where,
+            "triangles": self.triangles,
+            "local_spread": self.spread,
+            "calibrated_spread": self.calibrated,
+            "box": list(self.box),
+        }
+
+
+def calibration_flags(
+    mesh: Mesh, calibrated: np.ndarray, sample: np.ndarray | None = None
+) -> tuple[QualityFlag, ...]:
+    """The parts of ``mesh`` outside what their calibration was measured on.
+
+    Parameters
+    ----------
+    mesh : Mesh
+        Not periodic.
+    calibrated : ndarray, shape (M,)
+        The local spread every triangle was calibrated for (the mesh's, or its
+        class's); a region whose own spread differs from it by more than
+        :data:`TOLERANCE` is a patch.
+    sample : ndarray, shape (M,), optional
+        The local spread of the sample every triangle's calibration was measured on;
+        where ``calibrated`` exceeds it by more than :data:`REACH_MARGIN`, the
+        calibration is beyond its samples' reach.
+
+    Returns
+    -------
+    tuple of QualityFlag
+        Beyond-reach flags first (one per distinct calibrated spread), then the
+        patches, largest first.
+    """
+    calibrated = np.asarray(calibrated, dtype=float)
+    flags = list(_reach_flags(mesh, calibrated, sample))
+    field = triangle_spread(mesh)
+    for tris in patches(mesh, calibrated, field):
+        flags.append(
+            QualityFlag(
+                "patch",
+                _where(mesh, tris),
+                len(tris),
+                float(field[tris].mean()),
+                float(np.median(calibrated[tris])),
+                _box(mesh, tris),
+            )
+        )
+    return tuple(flags)
+
+
+def triangle_spread(mesh: Mesh) -> np.ndarray:
+    """The local spread around every triangle, shape (M,): the mean over its nodes of
+    :func:`.relaxed.spread_field` over :data:`QUALITY_RINGS` rings."""
+    return spread_field(mesh, rings=QUALITY_RINGS)[mesh.triangles].mean(axis=1)
+
+
+def patches(mesh: Mesh, calibrated, field: np.ndarray | None = None) -> list[np.ndarray]:
+    """The regions of ``mesh`` (arrays of triangle indices, largest first) whose local
+    spread differs from ``calibrated`` (a value, or one per triangle, shape (M,)) by
+    more than :data:`TOLERANCE`: edge-connected, at least :data:`MIN_TRIANGLES`
+    triangles, off the boundary's first ring.
+
+    ``field`` (shape (M,)) is :func:`triangle_spread`, computed when not given."""
+    field = triangle_spread(mesh) if field is None else field
+    off = (np.abs(field - calibrated) > TOLERANCE) & ~_near_boundary(mesh)
+    return _clusters(mesh, off)
+
+
+def _reach_flags(mesh: Mesh, calibrated: np.ndarray, sample):
+    if sample is None:
+        return
+    sample = np.asarray(sample, dtype=float)
+    beyond = calibrated > sample + REACH_MARGIN
+    whole = bool(beyond.all())
+    for value in np.unique(calibrated[beyond]):  # one per class: a handful
+        tris = np.flatnonzero(beyond & (calibrated == value))
+        where = "the whole mesh" if whole else _where(mesh, tris)
+        yield QualityFlag(
+            "reach",
+            where,
+            len(tris),
+            float(value),
+            float(np.median(sample[tris])),
+            _box(mesh, tris),
+        )
+
+
+def _near_boundary(mesh: Mesh) -> np.ndarray:
+    """Triangles with a node on the boundary or next to it (the boundary's cut cells
+    and surface springs are not the interior micro-structure), shape (M,)."""
+    on = np.zeros(mesh.n_points, dtype=float)
+    on[mesh.boundary_nodes] = 1.0
+    near = (mesh.topology.ring_step(mesh.n_points) @ on) > 0
+    return near[mesh.triangles].any(axis=1)
+
+
+def _clusters(mesh: Mesh, flagged: np.ndarray) -> list[np.ndarray]:
+    """Edge-connected sets of flagged triangles with at least :data:`MIN_TRIANGLES`,
+    largest first."""
+    if np.count_nonzero(flagged) < MIN_TRIANGLES:
+        return []
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components
+
+    bt = mesh.topology.bond_tris
+    a, b = bt[:, 0], bt[:, 1]
+    keep = (b >= 0) & flagged[a] & flagged[np.maximum(b, 0)]
+    m = mesh.n_triangles
+    graph = sp.coo_matrix((np.ones(np.count_nonzero(keep)), (a[keep], b[keep])), shape=(m, m))
+    _, label = connected_components(graph, directed=False)
+    label = np.where(flagged, label, -1)
+    sizes = np.bincount(label[flagged])
+    big = np.flatnonzero(sizes >= MIN_TRIANGLES)
+    big = big[np.argsort(-sizes[big], kind="stable")]
+    return [np.flatnonzero(label == c) for c in big]  # a handful of regions
+
+
+def _where(mesh: Mesh, tris: np.ndarray) -> str:
+    """The named region holding most of ``tris`` (if it holds most of them), else the
+    place (their centroid)."""
+    best, share = None, 0.5
+    for name, members in mesh.regions.items():
+        s = np.count_nonzero(np.isin(tris, members)) / len(tris)
+        if s > share:
+            best, share = name, s
+    if best is not None:
+        return f"region {best!r}"
+    x, y = mesh.points[mesh.triangles[tris]].reshape(-1, 2).mean(axis=0)
+    return f"triangles around ({x:.3g}, {y:.3g})"
+
+
+def _box(mesh: Mesh, tris: np.ndarray) -> tuple[float, float, float, float]:
+    p = mesh.points[mesh.triangles[tris]].reshape(-1, 2)
+    lo, hi = p.min(axis=0), p.max(axis=0)
+    return (float(lo[0]), float(lo[1]), float(hi[0]), float(hi[1]))

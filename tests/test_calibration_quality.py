@@ -1,0 +1,137 @@
+"""Parts of a mesh outside what their calibration was measured on
+(dvstatic.lattice.calibration.quality): a patch of another micro-structure is found and
+calibrated by class; what no sample reaches is named in a warning."""
+
+import logging
+
+import numpy as np
+import pytest
+from scipy.spatial import Delaunay
+
+import dvstatic as dv
+from dvstatic.lattice.calibration import calibration_flags, classes, spread_classes
+from dvstatic.lattice.calibration.quality import TOLERANCE, patches
+from dvstatic.lattice.calibration.relaxed import MIXED_SPREAD, local_spread, spread_field
+
+E, NU = 1e4, 0.3
+CENTRE = np.array([1.0, 0.5])
+
+
+def patch_mesh(h=0.02, r=0.15, regions=False):
+    """A 2 x 1 regular lattice with a disc of random points of radius ``r`` at its
+    centre (no recipe)."""
+    a = dv.mesh.rectangle(2, 1, h, kind="lattice").points
+    a = a[np.hypot(*(a - CENTRE).T) > r]
+    b = dv.mesh.rectangle(2, 1, h, kind="random", seed=3).points
+    b = b[np.hypot(*(b - CENTRE).T) <= r - 0.3 * h]
+    pts = np.vstack([a, b])
+    tri = Delaunay(pts).simplices
+    bare = dv.Mesh(pts, tri)
+    mid = pts[bare.boundary_edges].mean(axis=1)
+    edges = bare.boundary_edges
+    parts = {"left": edges[mid[:, 0] < 1e-9], "right": edges[mid[:, 0] > 2 - 1e-9]}
+    reg = {}
+    if regions:
+        c = pts[tri].mean(axis=1)
+        reg = {"disc": np.flatnonzero(np.hypot(*(c - CENTRE).T) < r)}
+    return dv.Mesh(pts, tri, parts=parts, regions=reg)
+
+
+def clustered(n=3000, seed=0):
+    """Random points in the unit square, each with a satellite 0.004 away: more
+    irregular than random points (local spread 0.46 against 0.365)."""
+    rng = np.random.default_rng(seed)
+    p = rng.random((n, 2))
+    p = np.vstack([p, p + rng.normal(0, 0.004, p.shape)])
+    p = p[(p > 0).all(axis=1) & (p < 1).all(axis=1)]
+    return dv.Mesh(p, Delaunay(p).simplices)
+
+
+def test_a_patch_too_small_for_the_percentiles_is_found_and_calibrated_by_class():
+    mesh = patch_mesh()
+    lo, hi = np.percentile(spread_field(mesh), [10, 90])
+    assert hi - lo <= MIXED_SPREAD  # the percentile test alone sees one micro-structure
+    found = patches(mesh, local_spread(mesh))
+    assert len(found) == 1
+    c = mesh.points[mesh.triangles[found[0]]].reshape(-1, 2).mean(axis=0)
+    assert np.hypot(*(c - CENTRE)) < 0.03
+    assert 300 < len(found[0]) < mesh.n_triangles / 10
+    assert spread_classes(mesh) is not None
+
+
+def test_flags_name_the_region_the_descriptor_and_the_values():
+    mesh = patch_mesh(regions=True)
+    calibrated = np.full(mesh.n_triangles, local_spread(mesh))
+    (flag,) = calibration_flags(mesh, calibrated)
+    assert flag.kind == "patch" and flag.where == "region 'disc'"
+    assert flag.spread > flag.calibrated + TOLERANCE
+    assert flag.box[0] > 0.8 and flag.box[2] < 1.2
+    assert "local spread" in flag.message() and "region 'disc'" in flag.message()
+    # without regions: the place
+    (flag,) = calibration_flags(patch_mesh(), calibrated)
+    assert flag.where.startswith("triangles around (1")
+
+
+@pytest.mark.parametrize("kind", ["jittered", "cvt", "random"])
+def test_meshes_of_one_micro_structure_raise_no_flag(kind):
+    r = dv.mesh.rectangle(2, 1, 0.015, kind=kind, seed=5)
+    bare = dv.Mesh(r.points, r.triangles)
+    assert calibration_flags(bare, np.full(bare.n_triangles, local_spread(bare))) == ()
+    assert spread_classes(bare) is None
+
+
+def test_a_graded_mesh_raises_no_flag():
+    tunnel = dv.domain.Circle((0, 0), 1.0, "tunnel")
+    domain = dv.domain.Domain(dv.domain.Circle((0, 0), 10.0, "boundary"), (tunnel,))
+    mesh = dv.mesh.generate(domain, dv.mesh.size_near(domain, "tunnel", 0.05, 0.5, 3.0))
+    bare = dv.Mesh(mesh.points, mesh.triangles, parts=mesh.parts)  # without its recipe
+    assert calibration_flags(bare, np.full(bare.n_triangles, local_spread(bare))) == ()
+
+
+def test_a_mesh_beyond_the_samples_reach_is_named_in_a_warning(caplog):
+    mesh = clustered()
+    model = dv.DV(mesh, E, NU)
+    with caplog.at_level(logging.WARNING, logger="dvstatic.lattice.models"):
+        _ = model.operator
+    (flag,) = model.calibration_flags
+    assert flag.kind == "reach" and flag.where == "the whole mesh"
+    assert flag.spread > 0.42 and abs(flag.calibrated - 0.365) < 0.01
+    assert flag.triangles == mesh.n_triangles
+    assert sum("beyond the most irregular" in r.getMessage() for r in caplog.records) == 1
+    assert model.damaged(np.ones(mesh.n_bonds)).calibration_flags == model.calibration_flags
+    from dvstatic.report import _model_summary
+
+    (entry,) = _model_summary(model)["calibration_flags"]
+    assert entry["kind"] == "reach" and entry["message"] == flag.message()
+
+
+def test_meshes_with_a_recipe_and_given_micro_parameters_are_not_checked():
+    mesh = dv.mesh.rectangle(1, 1, 0.05, kind="random")
+    assert dv.DV(mesh, E, NU).calibration_flags == ()
+    model = dv.DV(clustered(), E, NU, calibration=dv.DV(mesh, E, NU).micro)
+    assert model.calibration_flags == ()
+
+
+def _patch_modulus(model):
+    """E_eff / E inside the disc (r < 0.1) from its mean strain under uniaxial tension
+    (a soft or stiff disc takes a strain near its own compliance)."""
+    sup = [dv.Fix("left", x=0.0), dv.Fix(at=(0, 0), y=0.0)]
+    sol = dv.solve(model, sup, [dv.Traction("right", (1.0, 0.0))])
+    mesh = model.mesh
+    x, u = mesh.points[mesh.triangles], sol.u[mesh.triangles]
+    d = np.stack([x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]], axis=-1)
+    du = np.stack([u[:, 1] - u[:, 0], u[:, 2] - u[:, 0]], axis=-1)
+    exx = (du @ np.linalg.inv(d))[:, 0, 0]
+    area = 0.5 * np.abs(np.linalg.det(d))
+    sel = np.hypot(*(x.mean(axis=1) - CENTRE).T) < 0.1
+    return 1.0 / (E * np.sum(exx[sel] * area[sel]) / area[sel].sum())
+
+
+@pytest.mark.slow
+def test_the_patch_gets_its_modulus_by_class(monkeypatch):
+    mesh = patch_mesh(h=0.01)  # 23,686 nodes; the disc 30 spacings across
+    assert abs(_patch_modulus(dv.DV(mesh, E, NU)) - 1) < 0.02  # measured 1.004
+    monkeypatch.setattr(classes, "patches", lambda *a, **k: [])
+    one = dv.DV(mesh, E, NU)
+    assert one.micro_field is None and len(one.calibration_flags) == 1
+    assert _patch_modulus(one) < 0.95  # measured 0.921
