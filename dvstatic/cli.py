@@ -300,13 +300,14 @@ def _fe_reference(sc, mesh, supports, loads, say, nonlinear: bool):
 
 def _fe_dof(mesh, order: int, refine: int) -> int:
     """Unknowns of the FE reference: each uniform refinement makes V + E vertices,
-    2 E + 3 T edges and 4 T triangles; P2 adds a node per edge (the estimate of its
-    time: 10 s for 2.8e5 dof, plate_with_hole refined once, measured with AMG-CG)."""
+    2 E + 3 T edges and 4 T triangles; Pk adds k - 1 nodes per edge and
+    (k - 1)(k - 2) / 2 per triangle (the estimate of its time: 10 s for 2.8e5 dof,
+    plate_with_hole refined once, measured with AMG-CG)."""
     v, t = mesh.n_points, len(mesh.triangles)
     e = v + t - 1  # Euler, one body without holes (holes change it by a few)
     for _ in range(refine):
         v, e, t = v + e, 2 * e + 3 * t, 4 * t
-    return 2 * (v + e if order == 2 else v)
+    return 2 * (v + (order - 1) * e + (order - 1) * (order - 2) // 2 * t)
 
 
 def _fe_solve(sc, mesh, supports, loads):

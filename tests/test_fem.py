@@ -22,7 +22,7 @@ def test_lame_plane_stress_closed_form():
     assert abs(syy) <= 1e-15
 
 
-@pytest.mark.parametrize("order", [1, 2])
+@pytest.mark.parametrize("order", [1, 2, 3, 4])
 @pytest.mark.parametrize("refine", [0, 1])
 def test_fe_reproduces_uniaxial_field(order, refine):
     m = dv.mesh.rectangle(1.0, 1.0, 0.1, kind="jittered", seed=1)
@@ -125,6 +125,45 @@ def test_p2_with_curved_geometry_matches_a_clamped_lame_ring():
     assert s[1, 1, 1] == pytest.approx(hoop, rel=2e-3)
 
 
+@pytest.mark.parametrize("order", [1, 2, 3, 4])
+def test_per_node_boundary_values_give_the_affine_field_at_every_order(order):
+    """Displacements prescribed node by node on the whole boundary, interpolated along
+    each coarse edge to the facet dofs (two or three of them per facet from P3 up): an
+    affine field is reproduced everywhere."""
+    mesh = dv.mesh.rectangle(1.0, 1.0, 0.1, kind="jittered", seed=3)
+    g = np.array([[1e-3, 2e-4], [-3e-4, 5e-4]])
+    exact = mesh.points @ g.T
+    nodes = mesh.boundary_nodes
+    sup = [dv.Fix(nodes, x=exact[nodes, 0], y=exact[nodes, 1])]
+    fe = fem.solve(mesh, 1e3, 0.25, sup, [], order=order, refine=1)
+    assert np.abs(fe.u - exact).max() <= 1e-10 * np.abs(exact).max()
+    inner = np.random.default_rng(0).uniform(0.05, 0.95, (20, 2))
+    np.testing.assert_allclose(fe.evaluate(inner), inner @ g.T, rtol=1e-9, atol=1e-14)
+
+
+def test_higher_orders_converge_faster_on_the_lame_ring():
+    """Hoop stress at the bore of a ring clamped outside: P3 and P4 on the same
+    triangles err less than P2 (quadratic geometry for all three)."""
+    E, nu, a, b, p = 1e3, 0.3, 0.5, 1.0, 1.0
+    mesh = dv.mesh.disc(b, 0.05, kind="jittered", holes=[dv.domain.Circle((0, 0), a, "bore")])
+    c1 = -p * (1 - nu**2) / (E * ((1 + nu) + (1 - nu) * b**2 / a**2))
+    hoop = E / (1 - nu**2) * c1 * ((1 + nu) - (1 - nu) * b**2 / a**2)
+    pts = (
+        a
+        * np.c_[
+            np.cos(np.linspace(0, 2 * np.pi, 9)[:-1]), np.sin(np.linspace(0, 2 * np.pi, 9)[:-1])
+        ]
+    )
+    t = np.c_[-pts[:, 1], pts[:, 0]] / a
+    err = {}
+    for order in (2, 3, 4):
+        fe = fem.solve(mesh, E, nu, [dv.Fix("boundary")], [dv.Pressure("bore", p)], order=order)
+        s = np.einsum("ni,nij,nj->n", t, fe.stress(pts), t)
+        err[order] = np.abs(s / hoop - 1).max()
+    assert err[3] < err[2] / 3 and err[4] < err[3]
+    assert err[4] < 1e-3
+
+
 def test_evaluate_at_many_points_in_chunks(monkeypatch):
     """scikit-fem's element finder maps every point into every candidate element of a
     call (15.6 GiB for 16,835 points on a fine reference): points go in chunks, with the
@@ -151,7 +190,7 @@ def _ring_problem():
     return mesh, sup, [dv.Pressure("bore", 1.0)]
 
 
-@pytest.mark.parametrize("order", [1, 2])
+@pytest.mark.parametrize("order", [1, 2, 3])
 def test_values_at_nodes_read_the_nodal_dofs_as_point_location_does(order):
     # the lattice nodes are FE vertices: their values come from the nodal dofs without
     # point location; points a hair inside their elements go through point location
@@ -186,7 +225,7 @@ def test_large_fe_systems_are_solved_by_amg_cg_as_directly(monkeypatch):
     np.testing.assert_allclose(again.u, direct.u, rtol=0, atol=1e-12 * np.abs(direct.u).max())
 
 
-@pytest.mark.parametrize("order", [1, 2])
+@pytest.mark.parametrize("order", [1, 2, 3, 4])
 def test_stiffness_equals_scikit_fem_form_assembly(order, monkeypatch):
     """The vectorised element matrices equal scikit-fem's form assembly (curved P2
     geometry at a hole, per-element Lame constants, several chunks) to rounding."""

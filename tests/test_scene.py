@@ -192,6 +192,10 @@ def test_good_scene_and_overrides(tmp_path):
         scene.load(path, ["supports.3.x=1.0"])
     sc = scene.load(path, ["supports.0.x=0.0"])
     assert sc.data["supports"][0]["x"] == 0.0
+    assert scene.load(path, ["output.fe_order=4"]).data["output"]["fe_order"] == 4
+    for bad in (0, 5):
+        with pytest.raises(scene.SceneError, match="output.fe_order.*must be 1 to 4"):
+            scene.load(path, [f"output.fe_order={bad}"])
 
 
 def test_scene_reference_covers_every_key():

@@ -2,8 +2,9 @@
 
 Every example with ``fe_compare`` runs three times with ``dvstatic run`` in a fresh
 process: without the reference, with it as the scene has it (the default: P2 on the
-lattice's own triangles), and with it refined once more. The third run estimates the
-reference's own error at every printed check, ``|fe - fe_finer|``, and the lattice's,
+lattice's own triangles), and with a finer one: one element order up on the same
+triangles (P4: refined once more). The third run estimates the reference's own error
+at every printed check, ``|fe - fe_finer|``, and the lattice's,
 ``|lattice - fe_finer|``; their ratio says how much more accurate the reference is.
 Each run's wall time and peak memory (``wait4`` of the child) are recorded; the ratio
 "with / without" is what the reference costs.
@@ -61,16 +62,26 @@ def run(example: str, out: Path, *settings: str) -> dict:
     return {"summary": data, "seconds": wall, "peak_mb": usage.ru_maxrss / 1024}
 
 
-def scene_refine(example: str) -> int:
+def scene_fe(example: str) -> tuple[int, int]:
+    """The scene's FE reference: its element order and refinements."""
     data = tomllib.loads((ROOT / "examples" / f"{example}.toml").read_text())
-    return int(data.get("output", {}).get("fe_refine", 0))
+    out = data.get("output", {})
+    return int(out.get("fe_order", 2)), int(out.get("fe_refine", 0))
+
+
+def finer_settings(order: int, refine: int) -> tuple[str, ...]:
+    """The finer reference: one element order up on the same triangles (P4: refined
+    once more)."""
+    if order < 4:
+        return (f"output.fe_order={order + 1}",)
+    return (f"output.fe_refine={refine + 1}",)
 
 
 def measure(example: str, tmp: Path) -> dict:
-    refine = scene_refine(example)
+    order, refine = scene_fe(example)
     bare = run(example, tmp / "bare", "output.fe_compare=false")
     ref = run(example, tmp / "ref")
-    finer = run(example, tmp / "finer", f"output.fe_refine={refine + 1}")
+    finer = run(example, tmp / "finer", *finer_settings(order, refine))
     checks = []
     for c, f in zip(ref["summary"]["checks"], finer["summary"]["checks"], strict=True):
         scale = abs(f["fe_value"]) or 1.0
@@ -88,7 +99,9 @@ def measure(example: str, tmp: Path) -> dict:
     return {
         "example": example,
         "nodes": ref["summary"]["mesh"]["nodes"],
+        "fe_order": order,
         "fe_refine": refine,
+        "finer": list(finer_settings(order, refine)),
         "fe_dof": fe["n_dof"],
         "fe_solver": fe.get("solver"),
         "fe_seconds": fe["seconds"],
@@ -109,7 +122,7 @@ def main(argv=None) -> int:
             rows.append(r)
             worst = min(c["ratio"] for c in r["checks"])
             print(
-                f"{example:16s} {r['nodes']:7,d} nodes, P2 refine {r['fe_refine']} "
+                f"{example:16s} {r['nodes']:7,d} nodes, P{r['fe_order']} refine {r['fe_refine']} "
                 f"{r['fe_dof']:8,d} dof "
                 f"({r['fe_solver']}): time x{r['time_ratio']:.2f} "
                 f"({r['seconds']['with']:.1f} / {r['seconds']['without']:.1f} s), "

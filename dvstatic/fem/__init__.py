@@ -1,6 +1,6 @@
 """Plane-stress finite-element reference (scikit-fem) on the lattice's own triangles.
 
-``solve(mesh, E, nu, supports, loads, order=1 | 2, refine=0)`` takes the same
+``solve(mesh, E, nu, supports, loads, order=1 ... 4, refine=0)`` takes the same
 :class:`~dvstatic.Fix`, :class:`~dvstatic.Traction`, :class:`~dvstatic.Pressure`,
 :class:`~dvstatic.BodyForce` and :class:`~dvstatic.PointLoad` objects as
 :func:`dvstatic.solve`, builds P1 or P2 vector elements on the mesh triangles
@@ -70,6 +70,8 @@ __all__ = [
 
 #: most uniform refinements of the FE reference (the library's and the scene's limit)
 MAX_REFINE = 8
+#: highest Lagrange element order (P1 to P4)
+MAX_ORDER = 4
 
 
 @dataclass(frozen=True, eq=False)
@@ -136,8 +138,7 @@ class FESolution:
         import skfem
 
         lam, mu, lzz = (v[:, None] for v in self.lame)
-        el = skfem.ElementTriP1() if self.order == 1 else skfem.ElementTriP2()
-        sb = skfem.Basis(self.fe_mesh.skfem, el)
+        sb = skfem.Basis(self.fe_mesh.skfem, _scalar_element(self.order))
         # each displacement component as a scalar field of sb (a quarter of the vector
         # basis's quadrature data): its gradient (2, elements, quadrature points)
         g = [sb.interpolate(_component(self._dofs, sb, self.x, c)).grad for c in range(2)]
@@ -224,8 +225,8 @@ def solve(
         Young's modulus (> 0) and Poisson's ratio (-1 < nu < 1; < 0.5 in plane strain).
     supports, loads
         As for :func:`dvstatic.solve`.
-    order : {1, 2}
-        Lagrange element order (2: quadratic geometry on curved boundaries).
+    order : {1, 2, 3, 4}
+        Lagrange element order (2 and up: quadratic geometry on curved boundaries).
     refine : int
         Uniform refinements (each splits a triangle into four), >= 0.
     plane, thickness, materials
@@ -256,7 +257,7 @@ def solve(
         raise InputError("the FE reference needs a bounded mesh", "mesh")
     table = _materials(mesh, Elastic(E, nu, plane), materials)
     t = 1.0 if thickness is None else check_positive("thickness", thickness)
-    order = check_int("order", order, minimum=1, maximum=2)
+    order = check_int("order", order, minimum=1, maximum=MAX_ORDER)
     refine = check_int("refine", refine, minimum=0, maximum=MAX_REFINE)
     t0 = time.perf_counter()
     fe = build(mesh, refine, order)
@@ -272,10 +273,7 @@ def solve(
     A, b, x_free, free = skfem.condense(K, f, x=x, D=D)
     del K  # A is a copy
     t2 = time.perf_counter()
-    comp = np.zeros(basis.N, dtype=np.int8)
-    comp[basis.nodal_dofs[1]] = 1
-    if basis.facet_dofs.size:
-        comp[basis.facet_dofs[1]] = 1
+    comp = _components(basis)
     x[free], solver, its = solve_spd(A, b, basis.doflocs[:, free].T, comp[free])
     t3 = time.perf_counter()
     nodal = basis.nodal_dofs
@@ -330,8 +328,9 @@ def _lame(m: Elastic) -> tuple[float, float, float]:
     return lam, mu, lam
 
 
-#: elements per chunk of the FE stiffness assembly (each chunk's basis holds its
-#: quadrature data: 12 P2 gradients at 6 points, about 35 MB per 2e4 elements)
+#: P2 elements per chunk of the FE stiffness assembly (each chunk's basis holds its
+#: quadrature data: 12 P2 gradients at 6 points, about 35 MB per 2e4 elements; higher
+#: orders take fewer, :func:`_chunk`)
 ASSEMBLY_CHUNK = 20_000
 
 
@@ -343,18 +342,39 @@ def _dof_basis(fe: FEMesh, order: int):
 
 
 def _component(vector, scalar, x: np.ndarray, c: int) -> np.ndarray:
-    """Component ``c`` of the vector dofs ``x`` as dofs of the scalar basis."""
+    """Component ``c`` of the vector dofs ``x`` as dofs of the scalar basis (of the
+    same order)."""
     out = np.zeros(scalar.N)
-    out[scalar.nodal_dofs[0]] = x[vector.nodal_dofs[c]]
-    if scalar.facet_dofs.size:
-        out[scalar.facet_dofs[0]] = x[vector.facet_dofs[c]]
+    for kind in ("nodal_dofs", "facet_dofs", "interior_dofs"):
+        s, v = getattr(scalar, kind), getattr(vector, kind)
+        # a vector element's dofs of each kind come as (x, y) pairs of its scalar dofs
+        for k in range(s.shape[0]):
+            out[s[k]] = x[v[2 * k + c]]
     return out
+
+
+def _components(basis) -> np.ndarray:
+    """The component (0: x, 1: y) of every dof of a vector ``basis``, shape (N,)."""
+    comp = np.zeros(basis.N, dtype=np.int8)
+    for kind in ("nodal_dofs", "facet_dofs", "interior_dofs"):
+        rows = getattr(basis, kind)
+        if rows.size:
+            comp[rows[1::2].ravel()] = 1
+    return comp
+
+
+def _scalar_element(order: int):
+    import skfem
+
+    return (skfem.ElementTriP1, skfem.ElementTriP2, skfem.ElementTriP3, skfem.ElementTriP4)[
+        order - 1
+    ]()
 
 
 def _vector_element(order: int):
     import skfem
 
-    return skfem.ElementVector(skfem.ElementTriP1() if order == 1 else skfem.ElementTriP2())
+    return skfem.ElementVector(_scalar_element(order))
 
 
 def _stiffness(fe: FEMesh, elem, per_element, n_dof: int) -> sp.csr_matrix:
@@ -372,8 +392,9 @@ def _stiffness(fe: FEMesh, elem, per_element, n_dof: int) -> sp.csr_matrix:
     iu, ju = np.triu_indices(nb)
     rows = np.empty((len(iu), n), dtype=np.int32 if n_dof < 2**31 else np.int64)
     cols, data = np.empty_like(rows), np.empty((len(iu), n))
-    for start in range(0, n, ASSEMBLY_CHUNK):
-        idx = np.arange(start, min(n, start + ASSEMBLY_CHUNK))
+    chunk = _chunk(fe, elem)
+    for start in range(0, n, chunk):
+        idx = np.arange(start, min(n, start + chunk))
         part = skfem.Basis(fe.skfem, elem, elements=idx)
         ke = _element_matrices(part, lam[idx], mu[idx])
         rows[:, idx], cols[:, idx] = part.element_dofs[iu], part.element_dofs[ju]
@@ -381,6 +402,17 @@ def _stiffness(fe: FEMesh, elem, per_element, n_dof: int) -> sp.csr_matrix:
     upper = sp.csr_matrix((data.ravel(), (rows.ravel(), cols.ravel())), shape=(n_dof, n_dof))
     del rows, cols, data
     return (upper + upper.T - sp.diags(upper.diagonal())).tocsr()
+
+
+def _chunk(fe: FEMesh, elem) -> int:
+    """Elements per assembly chunk: :data:`ASSEMBLY_CHUNK` for P2 (12 basis functions
+    at 6 quadrature points), fewer in proportion for higher orders (P3: 20 at 12, so a
+    chunk of 6,000; plate_with_hole, 1.7e4 P3 elements in one chunk: a peak of 516 MB
+    against 261 MB in chunks of 4,000)."""
+    import skfem
+
+    one = skfem.Basis(fe.skfem, elem, elements=np.array([0]))
+    return max(1, ASSEMBLY_CHUNK * 72 // (one.Nbfun * one.X.shape[1]))
 
 
 def _element_matrices(part, lam: np.ndarray, mu: np.ndarray) -> np.ndarray:
@@ -403,13 +435,8 @@ def _element_matrices(part, lam: np.ndarray, mu: np.ndarray) -> np.ndarray:
 
 def _resultant(basis, f: np.ndarray) -> tuple[float, float]:
     """Total applied force (the load vector summed per component)."""
-    out = []
-    for c in range(2):
-        dofs = np.concatenate(
-            [basis.nodal_dofs[c], basis.facet_dofs[c] if basis.facet_dofs.size else []]
-        )
-        out.append(float(f[dofs.astype(np.int64)].sum()))
-    return tuple(out)
+    comp = _components(basis)
+    return tuple(float(f[comp == c].sum()) for c in range(2))
 
 
 def _facets_of(mesh: Mesh, fe: FEMesh, edges: np.ndarray) -> np.ndarray:
@@ -540,10 +567,17 @@ def _facet_dofs(mesh: Mesh, fe: FEMesh, basis, edges: np.ndarray, comp: int):
     edge, s = fe.parent[rows], fe.s[rows]
     dofs = [basis.nodal_dofs[comp, fe.facets[rows, 0]], basis.nodal_dofs[comp, fe.facets[rows, 1]]]
     edges_, params = [edge, edge], [s[:, 0], s[:, 1]]
-    if basis.facet_dofs.shape[0]:  # P2: the mid-edge dof of every facet
-        dofs.append(basis.facet_dofs[comp, bf])
+    ends = fe.points[fe.facets[rows]]  # (k, 2, 2)
+    along = ends[:, 1] - ends[:, 0]
+    for k in range(comp, basis.facet_dofs.shape[0], 2):  # P2 and up: dofs inside facets
+        d = basis.facet_dofs[k, bf]
+        # where the dof lies between the facet's ends (on the chord; a curved facet's
+        # mid-nodes project onto it), mapped onto the facet's stretch of its coarse edge
+        t = np.einsum("ij,ij->i", basis.doflocs[:, d].T - ends[:, 0], along)
+        t /= np.einsum("ij,ij->i", along, along)
+        dofs.append(d)
         edges_.append(edge)
-        params.append(s.mean(axis=1))
+        params.append((1.0 - t) * s[:, 0] + t * s[:, 1])
     return np.concatenate(dofs), np.concatenate(edges_), np.concatenate(params)
 
 

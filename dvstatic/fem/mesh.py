@@ -5,9 +5,9 @@ Every boundary facet of the refined mesh remembers the coarse boundary edge it l
 ends along that edge (0 at its first node, 1 at its second). Supports and loads on
 named parts then select facets by parent, per-node prescribed values are interpolated
 along the coarse edge, and new boundary nodes are moved onto the true boundary curve
-of the mesh's domain (circles stay circles under refinement). With ``order=2`` the
-mid-edge nodes of boundary facets are moved onto the curve too (isoparametric
-quadratic geometry).
+of the mesh's domain (circles stay circles under refinement). With ``order >= 2`` the
+mid-edge nodes of boundary facets are moved onto the curve too (quadratic geometry:
+isoparametric for P2, subparametric for P3 and P4).
 """
 
 from __future__ import annotations
@@ -41,7 +41,7 @@ class FEMesh:
     curve : ndarray of int, shape (n_coarse_boundary_edges,) or None
         Domain curve of every coarse boundary edge (None without a domain).
     skfem : skfem.Mesh
-        ``MeshTri1``, or ``MeshTri2`` (quadratic geometry on curves) for ``order=2``.
+        ``MeshTri1``, or ``MeshTri2`` (quadratic geometry on curves) for ``order >= 2``.
     linear : skfem.MeshTri1
         The straight-sided mesh (where points are located).
     """
@@ -72,7 +72,7 @@ def build(mesh: Mesh, refine: int, order: int) -> FEMesh:
     """Refine ``mesh`` ``refine`` times (each splits a triangle into four) into an FE mesh.
 
     New nodes on the boundary lie on the domain's curves when the mesh was generated
-    in a :class:`~dvstatic.domain.Domain`; with ``order=2`` so do the mid-edge nodes
+    in a :class:`~dvstatic.domain.Domain`; with ``order >= 2`` so do the mid-edge nodes
     of the boundary facets.
     """
     import skfem
@@ -96,7 +96,7 @@ def build(mesh: Mesh, refine: int, order: int) -> FEMesh:
     p, t, parent_t, facets, parent, s = state
     fm = skfem.MeshTri(np.ascontiguousarray(p.T), np.ascontiguousarray(t.T))
     fe = FEMesh(p, t, parent_t, facets, parent, s, curve, fm, fm)
-    if order == 2 and curve is not None and not _all_straight(mesh, curve):
+    if order >= 2 and curve is not None and not _all_straight(mesh, curve):
         fe = _quadratic(mesh, fe)
     return fe
 

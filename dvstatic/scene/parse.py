@@ -249,8 +249,8 @@ def _check_rules(path, d: dict) -> None:
             path, "supports", "no supports: add [[supports]] tables that prevent rigid-body motion"
         )
     o = d["output"]
-    if o["fe_order"] not in (1, 2):
-        raise SceneError(path, "output.fe_order", f"must be 1 or 2, got {o['fe_order']}")
+    if o["fe_order"] not in (1, 2, 3, 4):
+        raise SceneError(path, "output.fe_order", f"must be 1 to 4, got {o['fe_order']}")
     if not 0 <= o["fe_refine"] <= MAX_REFINE:
         raise SceneError(
             path, "output.fe_refine", f"must be in [0, {MAX_REFINE}], got {o['fe_refine']}"

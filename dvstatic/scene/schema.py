@@ -361,7 +361,11 @@ SCHEMA: dict[str, F] = {
             "fe_compare": F(
                 "bool", "solve the FE reference on the same triangles and compare", default=False
             ),
-            "fe_order": F("int", "FE element order, 1 or 2", default=2),
+            "fe_order": F(
+                "int",
+                "FE element order, 1 to 4 (2 and up: quadratic geometry on curved boundaries)",
+                default=2,
+            ),
             "fe_refine": F(
                 "int",
                 "uniform refinements of the FE reference (0: P2 on the lattice's own triangles, "
