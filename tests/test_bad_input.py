@@ -317,10 +317,10 @@ CLI_CASES = [
         "accepted: recovered, virial, strain",
     ),
     (
-        "FE order 3",
-        lambda tmp: dv.fem.solve(_lattice(), 1e5, 0.2, dv.Fix("left"), [], order=3),
+        "FE order 5",
+        lambda tmp: dv.fem.solve(_lattice(), 1e5, 0.2, dv.Fix("left"), [], order=5),
         ValueError,
-        "order must be <= 2",
+        "order must be <= 4",
     ),
     (
         "with_spread below start",
