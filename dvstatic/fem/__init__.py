@@ -3,7 +3,7 @@
 ``solve(mesh, E, nu, supports, loads, order=1 ... 4, refine=0)`` takes the same
 :class:`~dvstatic.Fix`, :class:`~dvstatic.Traction`, :class:`~dvstatic.Pressure`,
 :class:`~dvstatic.BodyForce` and :class:`~dvstatic.PointLoad` objects as
-:func:`dvstatic.solve`, builds P1 or P2 vector elements on the mesh triangles
+:func:`dvstatic.solve`, builds P1 to P4 vector elements on the mesh triangles
 (uniformly refined ``refine`` times for a reference solution, new boundary nodes on
 the domain's true curves, :mod:`.mesh`), and returns the displacement at the lattice
 nodes (they stay vertices of the refined mesh) together with a way to evaluate it
@@ -392,10 +392,11 @@ def _stiffness(fe: FEMesh, elem, per_element, n_dof: int) -> sp.csr_matrix:
     iu, ju = np.triu_indices(nb)
     rows = np.empty((len(iu), n), dtype=np.int32 if n_dof < 2**31 else np.int64)
     cols, data = np.empty_like(rows), np.empty((len(iu), n))
-    chunk = _chunk(fe, elem)
+    dofs = skfem.Dofs(fe.skfem, elem)  # the global numbering, once for every chunk
+    chunk = _chunk(fe, elem, dofs)
     for start in range(0, n, chunk):
         idx = np.arange(start, min(n, start + chunk))
-        part = skfem.Basis(fe.skfem, elem, elements=idx)
+        part = skfem.Basis(fe.skfem, elem, elements=idx, dofs=dofs, disable_doflocs=True)
         ke = _element_matrices(part, lam[idx], mu[idx])
         rows[:, idx], cols[:, idx] = part.element_dofs[iu], part.element_dofs[ju]
         data[:, idx] = ke[iu, ju]
@@ -404,14 +405,14 @@ def _stiffness(fe: FEMesh, elem, per_element, n_dof: int) -> sp.csr_matrix:
     return (upper + upper.T - sp.diags(upper.diagonal())).tocsr()
 
 
-def _chunk(fe: FEMesh, elem) -> int:
+def _chunk(fe: FEMesh, elem, dofs) -> int:
     """Elements per assembly chunk: :data:`ASSEMBLY_CHUNK` for P2 (12 basis functions
     at 6 quadrature points), fewer in proportion for higher orders (P3: 20 at 12, so a
     chunk of 6,000; plate_with_hole, 1.7e4 P3 elements in one chunk: a peak of 516 MB
-    against 261 MB in chunks of 4,000)."""
+    against 261 MB in chunks of 4,000, measured before the chunk took this size)."""
     import skfem
 
-    one = skfem.Basis(fe.skfem, elem, elements=np.array([0]))
+    one = skfem.Basis(fe.skfem, elem, elements=np.array([0]), dofs=dofs, disable_doflocs=True)
     return max(1, ASSEMBLY_CHUNK * 72 // (one.Nbfun * one.X.shape[1]))
 
 

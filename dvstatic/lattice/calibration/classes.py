@@ -13,7 +13,7 @@ classes of equal spread in several meshes cost one sample): 1.4 % from P2 on tha
 mesh, each side's modulus within 0.6 %. A mesh whose percentiles do not differ that
 much but that holds a *patch* of another micro-structure (:func:`.quality.patches`: a
 connected region of at least 100 triangles whose local spread differs from the mesh's
-by more than 0.1) is calibrated by class too: a disc of random points 15 spacings
+by more than 0.1) is calibrated by class too: a disc of random points 30 spacings
 across in a regular lattice (23,686 nodes) came out 8 % (DV) and 5 % (RV) soft
 calibrated as the whole mesh, within 0.4 % by class.
 """
