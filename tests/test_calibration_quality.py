@@ -135,3 +135,83 @@ def test_the_patch_gets_its_modulus_by_class(monkeypatch):
     one = dv.DV(mesh, E, NU)
     assert one.micro_field is None and len(one.calibration_flags) == 1
     assert _patch_modulus(one) < 0.95  # measured 0.921
+
+
+def clustered_disc(h=0.02, r=0.2, materials=False):
+    """A 2 x 1 regular lattice with a disc of clustered points (random points, each
+    with a satellite 0.1 h away) at its centre: local spread 0.51 in the disc."""
+    rng = np.random.default_rng(0)
+    a = dv.mesh.rectangle(2, 1, h, kind="lattice").points
+    a = a[np.hypot(*(a - CENTRE).T) > r]
+    b = dv.mesh.rectangle(2, 1, h, kind="random", seed=3).points
+    b = b[np.hypot(*(b - CENTRE).T) <= r - 0.3 * h]
+    pts = np.vstack([a, b, b + rng.normal(0, 0.1 * h, b.shape)])
+    tri = Delaunay(pts).simplices
+    edges = dv.Mesh(pts, tri).boundary_edges
+    mid = pts[edges].mean(axis=1)
+    parts = {"left": edges[mid[:, 0] < 1e-9], "right": edges[mid[:, 0] > 2 - 1e-9]}
+    c = pts[tri].mean(axis=1)
+    reg = {"disc": np.flatnonzero(np.hypot(*(c - CENTRE).T) < r)} if materials else {}
+    return dv.Mesh(pts, tri, parts=parts, regions=reg)
+
+
+def test_hull_slivers_of_raw_points_are_not_patches():
+    p = np.random.default_rng(0).random((30_000, 2))
+    mesh = dv.Mesh(p, Delaunay(p).simplices)  # slivers up to 7 rings deep along the hull
+    assert patches(mesh, local_spread(mesh)) == []  # one of 116 triangles, 1 ring off
+    assert spread_classes(mesh) is None
+
+
+def test_an_interface_between_classes_is_not_a_patch():
+    h = 0.025
+    a = dv.mesh.rectangle(1, 1, h, kind="lattice").points
+    b = dv.mesh.rectangle(1, 1, h, kind="random", seed=3).points + [1.0, 0.0]
+    pts = np.unique(np.round(np.vstack([a, b]), 9), axis=0)
+    mesh = dv.Mesh(pts, Delaunay(pts).simplices)
+    x = mesh.points[mesh.triangles].mean(axis=1)[:, 0]
+    calibrated = np.where(x < 1, 0.0, 0.365)  # two classes, cut at the interface
+    assert calibration_flags(mesh, calibrated) == ()  # unsmoothed: a strip of 186
+
+
+def test_a_clustered_region_in_a_mesh_calibrated_by_class_is_a_patch():
+    model = dv.DV(clustered_disc(), E, NU)
+    assert model.micro_field is not None
+    (flag,) = model.calibration_flags
+    assert flag.kind == "patch" and flag.where.startswith("triangles around (1")
+    assert flag.spread > 0.45 and abs(flag.calibrated - 0.365) < 0.01
+    assert "measured at" in flag.message()
+
+
+@pytest.mark.parametrize("n", [151, 300, 524])
+def test_small_random_meshes_are_within_reach(n):
+    for seed in range(5):
+        p = np.random.default_rng(seed).random((n, 2))
+        mesh = dv.Mesh(p, Delaunay(p).simplices)
+        asked = np.full(mesh.n_triangles, local_spread(mesh))  # 0.36 to 0.39
+        flags = calibration_flags(mesh, asked, np.full(mesh.n_triangles, 0.365))
+        assert [f for f in flags if f.kind == "reach"] == []
+    big = clustered()  # 0.46: beyond reach however it is counted
+    asked = np.full(big.n_triangles, local_spread(big))
+    (flag,) = calibration_flags(big, asked, np.full(big.n_triangles, 0.365))
+    assert flag.kind == "reach"
+
+
+def test_a_region_covering_nearly_the_whole_mesh_names_no_place():
+    bare = patch_mesh()
+    mesh = dv.Mesh(bare.points, bare.triangles, regions={"body": np.arange(bare.n_triangles)})
+    (flag,) = calibration_flags(mesh, np.full(mesh.n_triangles, local_spread(mesh)))
+    assert flag.where.startswith("triangles around (1")
+
+
+def test_companion_models_do_not_warn_again(caplog):
+    mesh = clustered_disc(materials=True)
+    model = dv.DV(mesh, E, NU, materials={"disc": (2 * E, NU)})
+    sup = [dv.Fix("left", x=0.0), dv.Fix(at=(0, 0), y=0.0)]
+    with caplog.at_level(logging.WARNING, logger="dvstatic"):
+        sol = dv.solve(model, sup, [dv.Traction("right", (1.0, 0.0))])
+        sol.stress()
+    warned = [r for r in caplog.records if "calibration:" in r.getMessage()]
+    assert len(warned) == len(model.calibration_flags) >= 1
+    other = dv.DV(patch_mesh(), E, NU)
+    with pytest.raises(ValueError, match="same mesh"):
+        other.share_calibration_flags(model)

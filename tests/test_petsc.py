@@ -234,3 +234,17 @@ def test_petsc_options_are_pushed_under_a_prefix_and_removed():
         assert opts.getString(PREFIX + "pc_gamg_threshold") == "0.05"
     finally:
         opts.delValue(PREFIX + "pc_gamg_threshold")
+
+
+@needs_petsc
+def test_petsc_logs_the_calibration_warnings_once(caplog):
+    import logging
+
+    from test_calibration_quality import clustered_disc
+
+    model = dv.DV(clustered_disc(), 1e4, 0.3)  # a clustered disc: one calibration flag
+    sup = [dv.Fix("left", x=0.0), dv.Fix(at=(0, 0), y=0.0)]
+    with caplog.at_level(logging.WARNING, logger="dvstatic"):
+        dv.solve(model, sup, [dv.Traction("right", (1.0, 0.0))], solver="petsc")
+    warned = [r for r in caplog.records if "calibration:" in r.getMessage()]
+    assert len(warned) == len(model.calibration_flags) == 1

@@ -210,8 +210,16 @@ class VoronoiModel:
             closed=closed,
         )
         object.__setattr__(out, "micro_field", self.micro_field)  # the cached_properties
-        object.__setattr__(out, "calibration_flags", self.calibration_flags)
+        out.share_calibration_flags(self)
         return out
+
+    def share_calibration_flags(self, parent: VoronoiModel) -> None:
+        """Take ``parent``'s :attr:`calibration_flags` (a companion on the same mesh, as
+        the stress recovery and the fracture criteria build: warned once, by the
+        parent)."""
+        if parent.mesh is not self.mesh:
+            raise InputError("calibration flags are shared only on the same mesh", "parent")
+        object.__setattr__(self, "calibration_flags", parent.calibration_flags)
 
     def _check_calibration(self) -> None:
         cal = self.calibration

@@ -278,6 +278,8 @@ def _prepare(PETSc, comm, model, supports, loads, opts, seconds: dict) -> _Setup
     micros = micro_parameters(model, lay, lambda a: mpi.allreduce(np.asarray(a, dtype=float)))
     if not model.is_calibrated:
         model.set_micro(micros)
+    if rank == 0:  # the calibration warnings, once (every rank holds the whole mesh)
+        model.calibration_flags  # noqa: B018 (the cached_property, logged on first use)
     seconds["calibration"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     pm = type(model)(

@@ -368,8 +368,8 @@ SCHEMA: dict[str, F] = {
             ),
             "fe_refine": F(
                 "int",
-                "uniform refinements of the FE reference (0: P2 on the lattice's own triangles, "
-                "20x to 10,000x more accurate than the lattice at the examples' checks)",
+                "uniform refinements of the FE reference (0: elements of order fe_order on the "
+                "lattice's own triangles)",
                 default=0,
             ),
             "probes": F("points", "points where displacement and stress are reported", default=[]),

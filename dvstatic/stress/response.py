@@ -57,6 +57,7 @@ def companion(model: VoronoiModel, material: int) -> VoronoiModel:
             plane=model.plane,
             thickness=model.thickness,
         )
+        cache[material].share_calibration_flags(model)
     return cache[material]
 
 

@@ -150,6 +150,7 @@ def responses(model, length, area, dofs=None):
         if not sel.any():
             continue
         alone = dataclasses.replace(model, E=material.E, nu=material.nu, materials=None)
+        alone.share_calibration_flags(model)
         t_k, p_k = _uniform_response(alone, length, area, dofs)
         for c in range(3):
             tens[c][sel] = t_k[c][sel]

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import logging
 import time
+import weakref
 from collections.abc import Callable
 
 import numpy as np
@@ -110,14 +111,24 @@ def interior_spread(mesh: Mesh) -> float:
 
 def relative_lengths(mesh: Mesh) -> np.ndarray:
     """Every bond's length over the mean of the mean bond lengths at its two nodes,
-    shape (n_bonds,)."""
-    b = mesh.topology.bonds
-    lengths = mesh.bond_lengths()
-    n = mesh.n_points
-    total = np.bincount(b[:, 0], lengths, n) + np.bincount(b[:, 1], lengths, n)
-    count = np.bincount(b[:, 0], None, n) + np.bincount(b[:, 1], None, n)
-    h = total / np.maximum(count, 1)
-    return lengths / (0.5 * (h[b[:, 0]] + h[b[:, 1]]))
+    shape (n_bonds,) (kept per mesh, read-only)."""
+    cache = _FIELDS.setdefault(mesh, {})
+    if "ratio" not in cache:
+        b = mesh.topology.bonds
+        lengths = mesh.bond_lengths()
+        n = mesh.n_points
+        total = np.bincount(b[:, 0], lengths, n) + np.bincount(b[:, 1], lengths, n)
+        count = np.bincount(b[:, 0], None, n) + np.bincount(b[:, 1], None, n)
+        h = total / np.maximum(count, 1)
+        ratio = lengths / (0.5 * (h[b[:, 0]] + h[b[:, 1]]))
+        ratio.setflags(write=False)
+        cache["ratio"] = ratio
+    return cache["ratio"]
+
+
+#: per mesh (weakly): the relative bond lengths, the ring step, the node degrees and
+#: the squared-deviation field smoothed over 0, 1, 2, ... rings
+_FIELDS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def local_spread(mesh: Mesh) -> float:
@@ -147,17 +158,33 @@ MIXED_SPREAD = 0.15
 
 def spread_field(mesh: Mesh, rings: int = 2) -> np.ndarray:
     """The local spread around every node, shape (N,): the rms deviation from 1 of the
-    relative lengths (as in :func:`local_spread`) of the bonds within ``rings`` rings."""
-    b = mesh.topology.bonds
-    n = mesh.n_points
-    count = np.bincount(b[:, 0], None, n) + np.bincount(b[:, 1], None, n)
-    dev2 = (relative_lengths(mesh) - 1.0) ** 2
-    node = (np.bincount(b[:, 0], dev2, n) + np.bincount(b[:, 1], dev2, n)) / np.maximum(count, 1)
-    step = mesh.topology.ring_step(n)
-    deg = np.asarray(step.sum(axis=1)).ravel()
-    for _ in range(rings):
-        node = (step @ node) / deg
-    return np.sqrt(node)
+    relative lengths (as in :func:`local_spread`) of the bonds within ``rings`` rings.
+
+    Kept per mesh (the classes, their trigger and the calibration flags read 2 and 4
+    rings of the same field: each ring is smoothed once)."""
+    return np.sqrt(_smoothed_dev2(mesh, rings))
+
+
+def _smoothed_dev2(mesh: Mesh, rings: int) -> np.ndarray:
+    cache = _FIELDS.setdefault(mesh, {})
+    if 0 not in cache:
+        b = mesh.topology.bonds
+        n = mesh.n_points
+        count = np.bincount(b[:, 0], None, n) + np.bincount(b[:, 1], None, n)
+        dev2 = (relative_lengths(mesh) - 1.0) ** 2
+        node = (np.bincount(b[:, 0], dev2, n) + np.bincount(b[:, 1], dev2, n)) / np.maximum(
+            count, 1
+        )
+        step = mesh.topology.ring_step(n)
+        cache.update(step=step, deg=np.asarray(step.sum(axis=1)).ravel())
+        cache[0] = node
+    done = max(k for k in cache if isinstance(k, int) and k <= rings)
+    node = cache[done]
+    for k in range(done + 1, rings + 1):
+        node = (cache["step"] @ node) / cache["deg"]
+        node.setflags(write=False)
+        cache[k] = node
+    return node
 
 
 def rev_for_spread(sigma_l: float, n_points: int = REV_POINTS, seed: int = 0) -> Mesh:
@@ -315,7 +342,8 @@ def relaxed(
     -------
     MicroParameters
         ``stabilised=True``; ``details["source"]`` is ``"table"``, ``"recipe"`` or
-        ``"local spread"`` (``details["local_spread"]`` the mesh's descriptor,
+        ``"local spread"`` (``details["local_spread"]`` the spread asked for: the
+        mesh's descriptor, or ``spread`` where given (a class's, :mod:`.classes`);
         ``details["local_spread_sample"]`` its sample's),
         ``details["seconds"]`` the time it took (0 for a cached result).
 
