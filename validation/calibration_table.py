@@ -71,6 +71,12 @@ def main() -> None:
     p.add_argument("--seeds", type=int, default=2, help="samples per recipe")
     p.add_argument("--processes", type=int, default=2)
     p.add_argument(
+        "--cvt-family",
+        action="store_true",
+        help="only the curves of CVT samples at several Lloyd iterations (the samples of"
+        " CVT-like meshes without recipe), merged into the existing table",
+    )
+    p.add_argument(
         "--fabric",
         action="store_true",
         help="only the fabric-corrected curves of the point-set recipes (random, CVT),"
@@ -91,6 +97,8 @@ def main() -> None:
     ]
     if a.fabric:
         return _fabric(a, recipes[-2:], nu_m, points, seeds)
+    if a.cvt_family:
+        return _cvt_family(a, points, seeds)
     tasks = [(m, r, points, seeds, nu_m, "uniform") for m in ("DV", "RV") for r in recipes]
     t0 = time.perf_counter()
     results = _run(tasks, a.processes)
@@ -168,6 +176,68 @@ def _fabric(a, recipes, nu_m, points, seeds) -> None:
     table["fabric_seconds"] = time.perf_counter() - t0
     write_json(table, path)
     print(f"wrote {path} (fabric curves) in {table['fabric_seconds']:.0f} s")
+
+
+#: Lloyd iterations of the CVT family (0: random points); local spread 0.365 down to 0.051
+FAMILY_ITERATIONS = (0, 1, 2, 4, 8, 15, 30, 60, 120, 240, 480)
+#: perturbation amplitudes (relative to the spacing) whose defect fractions are tabulated
+PERTURBATIONS = (0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.5, 0.6)
+
+
+def _cvt_family(a, points, seeds) -> None:
+    """The curves of the CVT family (random points Lloyd-relaxed 0 ... 480 times) on a
+    grid of nu_m twice as coarse as the recipes', with every member's local spread and
+    defect fraction, and those of perturbed lattices: what the calibration of a mesh
+    without recipe interpolates (``relaxed.family_curve``). Merged into the table (the
+    package's, or the quick one)."""
+    import json
+
+    import dvstatic as dv
+    from dvstatic.lattice.calibration.relaxed import defect_fraction, local_spread
+
+    path = a.out / "relaxed_table_quick.json" if a.quick else PACKAGE_TABLE
+    table = json.loads(path.read_text())
+    iterations = (0, 2, 30) if a.quick else FAMILY_ITERATIONS
+    nu_m = np.round(np.arange(-1.6, 1.6 + 1e-9, 0.8 if a.quick else 0.1), 4)
+    recipes = [{"kind": "cvt", "iterations": k} if k else {"kind": "random"} for k in iterations]
+    t0 = time.perf_counter()
+    tasks = [(m, r, points, seeds, nu_m, "uniform") for m in ("DV", "RV") for r in recipes]
+    results = _run(tasks, a.processes)
+    family: dict = {
+        "iterations": list(iterations),
+        "sample_points": points,
+        "seeds": seeds,
+        "nu_m": nu_m,
+        "spread": [],
+        "defects": [],
+    }
+    for r in recipes:
+        rev = dv.mesh.periodic_sample(dv.mesh.Sampling(**r), points, seeds[0])
+        family["spread"].append(local_spread(rev))
+        family["defects"].append(defect_fraction(rev))
+    for model in ("DV", "RV"):
+        mine = {
+            r.get("iterations", 0): res
+            for res in results
+            if res["model"] == model
+            for r in [res["recipe"]]
+        }
+        family[model] = {
+            "nu": [mine[k]["nu"] for k in iterations],
+            "E": [mine[k]["E"] for k in iterations],
+        }
+    pert = {"amplitude": list(PERTURBATIONS), "spread": [], "defects": []}
+    for amp in PERTURBATIONS:
+        rev = dv.mesh.periodic_sample(
+            dv.mesh.Sampling("lattice", perturbations=(amp,) if amp else ()), points, seeds[0]
+        )
+        pert["spread"].append(local_spread(rev))
+        pert["defects"].append(defect_fraction(rev))
+    family["perturbed"] = pert
+    family["seconds"] = time.perf_counter() - t0
+    table["cvt_family"] = family
+    write_json(table, path)
+    print(f"wrote {path} (CVT family) in {family['seconds']:.0f} s")
 
 
 if __name__ == "__main__":

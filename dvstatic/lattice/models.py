@@ -293,11 +293,15 @@ class VoronoiModel:
             return self._calibrate(self.all_materials[material])
         return field.micros[(material, int(np.bincount(mine).argmax()))]
 
-    def _calibrate(self, material: Elastic, spread=None) -> calibration.MicroParameters:
+    def _calibrate(
+        self, material: Elastic, spread=None, defects=None
+    ) -> calibration.MicroParameters:
         E2, nu2 = material.in_plane
         if self.calibration == "relaxed":
             try:
-                return calibration.relaxed(self.kind, self.mesh, E2, nu2, self.bonds, spread=spread)
+                return calibration.relaxed(
+                    self.kind, self.mesh, E2, nu2, self.bonds, spread=spread, defects=defects
+                )
             except CalibrationError as exc:
                 if material.plane == "stress":
                     raise
@@ -324,7 +328,7 @@ class VoronoiModel:
         field = calibration.calibrate_classes(
             classes,
             self.material_of_triangle,
-            lambda mat, spread: self._calibrate(self.all_materials[mat], spread),
+            lambda mat, spread, defects: self._calibrate(self.all_materials[mat], spread, defects),
         )
         log.info("%s", field.describe())
         return field

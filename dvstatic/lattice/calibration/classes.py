@@ -26,7 +26,13 @@ import numpy as np
 
 from ...mesh import Mesh
 from .quality import patches
-from .relaxed import MIXED_SPREAD, local_spread, relative_lengths, spread_field
+from .relaxed import (
+    DEFECT_RINGS,
+    MIXED_SPREAD,
+    local_spread,
+    relative_lengths,
+    spread_field,
+)
 
 __all__ = [
     "CLASS_WIDTH",
@@ -58,11 +64,16 @@ class SpreadClasses:
     field : ndarray, shape (M,)
         The local spread around every triangle (the mean of its nodes'
         :func:`.relaxed.spread_field`) the classes were cut from.
+    defects : ndarray, shape (C,)
+        Every class's defect fraction (:func:`.relaxed.defect_fraction`): the share of
+        its interior nodes (a node belongs to the class of most of its triangles) with
+        other than six bonds.
     """
 
     of_triangle: np.ndarray
     spread: np.ndarray
     field: np.ndarray
+    defects: np.ndarray
 
     @property
     def n_classes(self) -> int:
@@ -101,7 +112,29 @@ def spread_classes(mesh: Mesh) -> SpreadClasses | None:
             sel = sel & inner
         spread[c] = float(np.std(ratio[sel]))
     cls.setflags(write=False)
-    return SpreadClasses(cls, spread, field)
+    return SpreadClasses(cls, spread, field, _class_defects(mesh, cls, len(spread)))
+
+
+def _class_defects(mesh: Mesh, cls: np.ndarray, n_classes: int) -> np.ndarray:
+    """Every class's defect fraction, shape (C,)."""
+    n = mesh.n_points
+    b = mesh.topology.bonds
+    degree = np.bincount(b[:, 0], None, n) + np.bincount(b[:, 1], None, n)
+    votes = np.zeros((n, n_classes))
+    np.add.at(votes, (mesh.triangles.ravel(), np.repeat(cls, 3)), 1.0)
+    node_cls = np.argmax(votes, axis=1)
+    near = np.zeros(n)
+    near[mesh.boundary_nodes] = 1.0
+    step = mesh.topology.ring_step(n)
+    for _ in range(DEFECT_RINGS):
+        near = step @ near
+    out = np.zeros(n_classes)
+    for c in range(n_classes):  # a handful of classes
+        mine = node_cls == c
+        inner = mine & (near == 0)
+        sel = inner if np.count_nonzero(inner) >= 30 else mine
+        out[c] = float(np.mean(degree[sel] != 6)) if sel.any() else 0.0
+    return out
 
 
 @dataclass(frozen=True)
@@ -126,7 +159,7 @@ class MicroField:
         """The field on the triangles ``triangles`` (global indices, shape (m,)), in
         their order: a patch of the mesh (the distributed engine's)."""
         c = self.classes
-        sub = SpreadClasses(c.of_triangle[triangles], c.spread, c.field[triangles])
+        sub = SpreadClasses(c.of_triangle[triangles], c.spread, c.field[triangles], c.defects)
         return MicroField(sub, self.k_n[triangles], self.nu_m[triangles], self.micros)
 
     def describe(self) -> str:
@@ -139,15 +172,15 @@ class MicroField:
 
 
 def calibrate_classes(classes: SpreadClasses, material_of_triangle: np.ndarray, calibrate):
-    """The :class:`MicroField` of ``classes``: ``calibrate(material, spread)`` gives the
-    MicroParameters of every (material, class) pair that occurs."""
+    """The :class:`MicroField` of ``classes``: ``calibrate(material, spread, defects)``
+    gives the MicroParameters of every (material, class) pair that occurs."""
     n = len(material_of_triangle)
     k_n, nu_m = np.empty(n), np.empty(n)
     micros = {}
     pair = material_of_triangle * classes.n_classes + classes.of_triangle
     for key in np.unique(pair):  # materials x classes: a handful
         mat, c = divmod(int(key), classes.n_classes)
-        micro = calibrate(mat, float(classes.spread[c]))
+        micro = calibrate(mat, float(classes.spread[c]), float(classes.defects[c]))
         sel = pair == key
         k_n[sel], nu_m[sel] = micro.k_n, micro.nu_m
         micros[(mat, c)] = micro

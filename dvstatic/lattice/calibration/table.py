@@ -6,6 +6,15 @@ the relaxed ``nu_eff`` and ``E_eff`` (at ``k_n = 1``) on a grid of ``nu_m``, mea
 on large periodic samples with the stabilised coupling. It is made by
 ``validation/calibration_table.py``; :func:`curve` interpolates it (monotone cubic in
 ``nu_m``, cubic in the jitter).
+
+It also holds the *CVT family* (``calibration_table.py --cvt-family``): random points
+Lloyd-relaxed 0 to 480 times, from local spread 0.365 (random) down to 0.051, with
+every member's local spread and defect fraction (interior nodes with other than six
+neighbours: 0.70 down to 0.13), and the defect fractions of perturbed lattices (none up
+to a local spread of 0.13). A mesh without recipe lies between the two families
+(gmsh's graded meshes near the CVT one, its uniform meshes near the perturbed
+lattices): :func:`family_weight` says where, :func:`family_curve` gives the CVT
+family's curve at a local spread.
 """
 
 from __future__ import annotations
@@ -20,7 +29,15 @@ from ..._cache import Bounded
 from ...mesh.recipe import Sampling
 from ..stabilise import MARGIN
 
-__all__ = ["TABLE_FILE", "WEIGHTINGS", "load", "curve", "TableCurve"]
+__all__ = [
+    "TABLE_FILE",
+    "WEIGHTINGS",
+    "load",
+    "curve",
+    "family_curve",
+    "family_weight",
+    "TableCurve",
+]
 
 TABLE_FILE = "relaxed_table.json"
 #: spring weightings of the samples in the table: uniform springs (the "surface" and
@@ -128,3 +145,55 @@ def _curve(
     nu = CubicSpline(grid, np.asarray(c["nu"]), axis=0)(jitter)
     E = CubicSpline(grid, np.asarray(c["E"]), axis=0)(jitter)
     return TableCurve(nu_m, nu, E, what, data)
+
+
+def _family() -> dict | None:
+    data = load()
+    return None if data is None else data.get("cvt_family")
+
+
+def family_curve(kind: str, spread: float) -> TableCurve | None:
+    """The CVT family's relaxed curve at local spread ``spread`` (linear in the spread
+    between the two members around it; clamped to the family's range, 0.051 to
+    0.365), or None without the family in the table."""
+    fam = _family()
+    if fam is None or kind not in fam:
+        return None
+    s = np.asarray(fam["spread"], dtype=float)
+    order = np.argsort(s)
+    s = s[order]
+    nu = np.asarray(fam[kind]["nu"], dtype=float)[order]
+    E = np.asarray(fam[kind]["E"], dtype=float)[order]
+    x = float(np.clip(spread, s[0], s[-1]))
+    j = int(np.clip(np.searchsorted(s, x), 1, len(s) - 1))
+    t = (x - s[j - 1]) / (s[j] - s[j - 1])
+    what = f"the CVT family at local spread {x:.3f}"
+    nu_m = np.asarray(fam["nu_m"], dtype=float)
+    nu_x, e_x = (1 - t) * nu[j - 1] + t * nu[j], (1 - t) * E[j - 1] + t * E[j]
+    return TableCurve(nu_m, nu_x, e_x, what, fam)
+
+
+def family_weight(spread: float, defects: float) -> float:
+    """Where a micro-structure of local spread ``spread`` and defect fraction
+    ``defects`` lies between the perturbed lattices (0) and the CVT family (1) of the
+    same local spread: ``(d - d_perturbed(s)) / (d_cvt(s) - d_perturbed(s))``, clipped
+    to [0, 1]; 0 without the family in the table, or where the two families' defect
+    fractions differ by less than 0.02 (random points, where both meet)."""
+    fam = _family()
+    if fam is None:
+        return 0.0
+
+    def at(s, d) -> float:
+        s, d = np.asarray(s, dtype=float), np.asarray(d, dtype=float)
+        order = np.argsort(s)
+        return float(np.interp(spread, s[order], d[order]))
+
+    # the perturbed lattices end in random points (:func:`.relaxed.rev_for_spread`),
+    # the CVT family's first member
+    rnd = int(np.argmax(fam["spread"]))
+    pert = fam["perturbed"]
+    d_cvt = at(fam["spread"], fam["defects"])
+    d_pert = at([*pert["spread"], fam["spread"][rnd]], [*pert["defects"], fam["defects"][rnd]])
+    if d_cvt - d_pert < 0.02:
+        return 0.0
+    return float(np.clip((defects - d_pert) / (d_cvt - d_pert), 0.0, 1.0))
