@@ -247,8 +247,16 @@ def cook_rows(path: Path, label: str) -> list[dict]:
 def descriptor_rows(points: int = 10_000) -> list[dict]:
     """Relaxed E and nu (DV, k_n = 1, nu_m = 0) of periodic samples of several
     micro-structures, measured, and predicted by a perturbed lattice of the same global
-    spread (sigma_L) or of the same local spread."""
-    from dvstatic.lattice.calibration.relaxed import local_spread, relaxed_moduli
+    spread (sigma_L), of the same local spread, and of the same local spread blended
+    with the table's CVT family by the defect fraction (the calibration of a mesh
+    without recipe, docs/theory.md 8.3). CVT 10 and 45, CVT 30 perturbed, jittered 0.45
+    and the lattice perturbed by 0.35 are not members of either family."""
+    from dvstatic.lattice.calibration import table
+    from dvstatic.lattice.calibration.relaxed import (
+        defect_fraction,
+        local_spread,
+        relaxed_moduli,
+    )
     from dvstatic.mesh import periodic_sample
     from dvstatic.mesh.recipe import Sampling
 
@@ -267,31 +275,51 @@ def descriptor_rows(points: int = 10_000) -> list[dict]:
     recipes = {
         "jittered 0.15": Sampling("jittered", 0.15),
         "jittered 0.3": Sampling("jittered", 0.3),
-        "cvt": Sampling("cvt", 0.0, 30),
+        "jittered 0.45": Sampling("jittered", 0.45),
+        "cvt 10": Sampling("cvt", 0.0, 10),
+        "cvt 30": Sampling("cvt", 0.0, 30),
+        "cvt 45": Sampling("cvt", 0.0, 45),
+        "cvt 30, perturbed 0.05": Sampling("cvt", 0.0, 30, perturbations=(0.05,)),
         "perturbed 0.1": Sampling("lattice", perturbations=(0.1,)),
         "perturbed 0.25": Sampling("lattice", perturbations=(0.25,)),
+        "perturbed 0.35": Sampling("lattice", perturbations=(0.35,)),
+        "random": Sampling("random"),
     }
     rows = []
     for name, recipe in recipes.items():
         sample = periodic_sample(recipe, points, 1)
         true = relaxed_moduli("DV", sample, 0.0)
-        g, loc = sample.edge_length_spread(), local_spread(sample)
+        g, loc, d = sample.edge_length_spread(), local_spread(sample), defect_fraction(sample)
         by_g = relaxed_moduli("DV", matched(g, lambda m: m.edge_length_spread()), 0.0)
         by_l = relaxed_moduli("DV", matched(loc, local_spread), 0.0)
+        w = table.family_weight(loc, d)
+        nu_f, e_f = table.family_curve("DV", loc)(0.0)
+        e_ld = (1 - w) * by_l["E"] + w * e_f
+        nu_ld = (1 - w) * by_l["nu"] + w * nu_f
         rows.append(
             {
                 "sample": name,
                 "sigma_L": g,
                 "local_spread": loc,
+                "defect_fraction": d,
+                "cvt_family_weight": w,
                 "E": float(true["E"]),
                 "nu": float(true["nu"]),
                 "E_by_sigma_L": float(by_g["E"] / true["E"] - 1),
                 "E_by_local_spread": float(by_l["E"] / true["E"] - 1),
+                "E_by_local_spread_and_defects": float(e_ld / true["E"] - 1),
                 "nu_by_sigma_L": float(by_g["nu"] - true["nu"]),
                 "nu_by_local_spread": float(by_l["nu"] - true["nu"]),
+                "nu_by_local_spread_and_defects": float(nu_ld - true["nu"]),
             }
         )
-        print(rows[-1], flush=True)
+        print(
+            f"{name:24s} sigma_L {g:.3f} local {loc:.3f} defects {d:.3f} w {w:.2f} "
+            f"E {true['E']:.4f}: by sigma_L {rows[-1]['E_by_sigma_L']:+.2%}, by local "
+            f"{rows[-1]['E_by_local_spread']:+.2%}, by local + defects "
+            f"{rows[-1]['E_by_local_spread_and_defects']:+.2%}",
+            flush=True,
+        )
     return rows
 
 
@@ -330,8 +358,14 @@ def main(argv=None) -> int:
             ),
             flush=True,
         )
+    descriptors = descriptor_rows(2_000 if args.quick else 10_000)
     path = write_json(
-        {"quick": args.quick, "rows": rows, "seconds": time.perf_counter() - t0},
+        {
+            "quick": args.quick,
+            "rows": rows,
+            "descriptors": descriptors,
+            "seconds": time.perf_counter() - t0,
+        },
         args.out / "imported.json",
     )
     print(f"wrote {path}")
