@@ -19,7 +19,13 @@ def _model_line(md: dict) -> str:
         txt += f", thickness {md['thickness']:g}"
     txt += f": k_n = {md['k_n']:.6g}, nu_m = {md['nu_m']:.6g} ({md['calibration']}"
     if md["calibration"] == "relaxed":
-        txt += f" from the {md['calibration_source']}, {md['calibration_seconds']:.2f} s"
+        txt += f" from the {md['calibration_source']}"
+        if "defect_fraction" in md:  # a mesh without recipe
+            txt += (
+                f" {md['local_spread']:.3f} and defect fraction {md['defect_fraction']:.2f}"
+                f", {md.get('cvt_family_weight', 0.0):.2f} CVT-like"
+            )
+        txt += f", {md['calibration_seconds']:.2f} s"
     txt += f"; bonds {md['bonds']})"
     classes = md.get("calibration_classes")
     if classes:  # k_n, nu_m above: the largest class's

@@ -252,6 +252,9 @@ def _model_summary(model) -> dict:
         "stabilised": model.micro.stabilised,
         "clipped_fraction": model.clipped_fraction,
     }
+    for key in ("local_spread", "defect_fraction", "cvt_family_weight"):
+        if key in details:  # a mesh without recipe: its descriptors
+            out[key] = float(details[key])
     field = model.micro_field
     if field is not None:  # a mesh that mixes micro-structures, calibrated class by class
         c = field.classes

@@ -215,3 +215,29 @@ def test_companion_models_do_not_warn_again(caplog):
     other = dv.DV(patch_mesh(), E, NU)
     with pytest.raises(ValueError, match="same mesh"):
         other.share_calibration_flags(model)
+
+
+def test_the_fracture_criteria_do_not_warn_again(caplog):
+    mesh = clustered_disc(materials=True)
+    model = dv.DV(mesh, E, NU, materials={"disc": (2 * E, NU)})
+    sup = [dv.Fix("left", x=0.0), dv.Fix(at=(0, 0), y=0.0)]
+    with caplog.at_level(logging.WARNING, logger="dvstatic"):
+        dv.fracture(model, sup, [dv.Traction("right", (1.0, 0.0))], ft=1.0, max_events=1)
+    warned = [r for r in caplog.records if "calibration:" in r.getMessage()]
+    assert len(warned) == len(model.calibration_flags) >= 1
+
+
+def test_cells_of_no_sample_family_are_named_in_a_warning(caplog):
+    x, y = np.meshgrid(np.linspace(0, 2, 61), np.linspace(0, 1, 31))
+    p = np.c_[x.ravel(), y.ravel()]
+    tri = []
+    for j in range(30):
+        for i in range(60):
+            a, b, c, d = j * 61 + i, j * 61 + i + 1, (j + 1) * 61 + i + 1, (j + 1) * 61 + i
+            tri += [[a, b, d], [b, c, d]] if (i + j) % 2 else [[a, b, c], [a, c, d]]
+    model = dv.DV(dv.Mesh(p, np.array(tri)), E, NU)  # alternating diagonals: 4 or 8 bonds
+    with caplog.at_level(logging.WARNING, logger="dvstatic.lattice.models"):
+        (flag,) = model.calibration_flags
+    assert flag.kind == "defects" and flag.where == "the whole mesh" and flag.spread == 1.0
+    assert "other than six bonds" in flag.message()
+    assert dv.DV(patch_mesh(), E, NU).calibration_flags == ()  # lattice beside random

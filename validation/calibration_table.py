@@ -95,10 +95,10 @@ def main() -> None:
         {"kind": "random"},
         {"kind": "cvt", "iterations": CVT_ITERATIONS},
     ]
+    if a.cvt_family:
+        return _cvt_family(a, points, seeds, "fabric" if a.fabric else "uniform")
     if a.fabric:
         return _fabric(a, recipes[-2:], nu_m, points, seeds)
-    if a.cvt_family:
-        return _cvt_family(a, points, seeds)
     tasks = [(m, r, points, seeds, nu_m, "uniform") for m in ("DV", "RV") for r in recipes]
     t0 = time.perf_counter()
     results = _run(tasks, a.processes)
@@ -184,12 +184,13 @@ FAMILY_ITERATIONS = (0, 1, 2, 4, 8, 15, 30, 60, 120, 240, 480)
 PERTURBATIONS = (0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.5, 0.6)
 
 
-def _cvt_family(a, points, seeds) -> None:
+def _cvt_family(a, points, seeds, bonds: str) -> None:
     """The curves of the CVT family (random points Lloyd-relaxed 0 ... 480 times) on a
     grid of nu_m twice as coarse as the recipes', with every member's local spread and
     defect fraction, and those of perturbed lattices: what the calibration of a mesh
-    without recipe interpolates (``relaxed.family_curve``). Merged into the table (the
-    package's, or the quick one)."""
+    without recipe interpolates (``table.family_curve``). Merged into the table (the
+    package's, or the quick one). With ``--fabric``: the fabric-corrected curves of the
+    same members, added to the family already there."""
     import json
 
     import dvstatic as dv
@@ -201,8 +202,23 @@ def _cvt_family(a, points, seeds) -> None:
     nu_m = np.round(np.arange(-1.6, 1.6 + 1e-9, 0.8 if a.quick else 0.1), 4)
     recipes = [{"kind": "cvt", "iterations": k} if k else {"kind": "random"} for k in iterations]
     t0 = time.perf_counter()
-    tasks = [(m, r, points, seeds, nu_m, "uniform") for m in ("DV", "RV") for r in recipes]
+    tasks = [(m, r, points, seeds, nu_m, bonds) for m in ("DV", "RV") for r in recipes]
     results = _run(tasks, a.processes)
+    if bonds == "fabric":
+        family = table["cvt_family"]
+        if family["iterations"] != list(iterations) or family["nu_m"] != list(nu_m):
+            raise SystemExit("the table's CVT family has other members: rerun --cvt-family")
+        family["fabric"] = {
+            model: {
+                "nu": [_member(results, model, k)["nu"] for k in iterations],
+                "E": [_member(results, model, k)["E"] for k in iterations],
+            }
+            for model in ("DV", "RV")
+        }
+        family["fabric_seconds"] = time.perf_counter() - t0
+        write_json(table, path)
+        print(f"wrote {path} (CVT family, fabric) in {family['fabric_seconds']:.0f} s")
+        return
     family: dict = {
         "iterations": list(iterations),
         "sample_points": points,
@@ -216,15 +232,9 @@ def _cvt_family(a, points, seeds) -> None:
         family["spread"].append(local_spread(rev))
         family["defects"].append(defect_fraction(rev))
     for model in ("DV", "RV"):
-        mine = {
-            r.get("iterations", 0): res
-            for res in results
-            if res["model"] == model
-            for r in [res["recipe"]]
-        }
         family[model] = {
-            "nu": [mine[k]["nu"] for k in iterations],
-            "E": [mine[k]["E"] for k in iterations],
+            "nu": [_member(results, model, k)["nu"] for k in iterations],
+            "E": [_member(results, model, k)["E"] for k in iterations],
         }
     pert = {"amplitude": list(PERTURBATIONS), "spread": [], "defects": []}
     for amp in PERTURBATIONS:
@@ -238,6 +248,13 @@ def _cvt_family(a, points, seeds) -> None:
     table["cvt_family"] = family
     write_json(table, path)
     print(f"wrote {path} (CVT family) in {family['seconds']:.0f} s")
+
+
+def _member(results, model: str, iterations: int) -> dict:
+    """The result of ``model`` on the family's member of ``iterations`` (0: random)."""
+    return next(
+        r for r in results if r["model"] == model and r["recipe"].get("iterations", 0) == iterations
+    )
 
 
 if __name__ == "__main__":

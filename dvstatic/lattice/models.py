@@ -367,6 +367,9 @@ class VoronoiModel:
             flags = calibration.calibration_flags(self.mesh, sample)
         else:
             flags = calibration.calibration_flags(self.mesh, asked[idx], sample)
+        if all("defect_fraction" in d for d in details):
+            defects = np.array([d["defect_fraction"] for d in details])[idx]
+            flags = flags + tuple(calibration.defect_flags(self.mesh, asked[idx], defects))
         for f in flags:
             log.warning("calibration: %s", f.message())
         return flags

@@ -18,7 +18,7 @@ from .paper import (
     paper,
     paper_from_moments,
 )
-from .quality import QualityFlag, calibration_flags
+from .quality import QualityFlag, calibration_flags, defect_flags
 from .relaxed import (
     REV_POINTS,
     SPREAD_STEP,
@@ -52,4 +52,5 @@ __all__ = [
     "spread_classes",
     "QualityFlag",
     "calibration_flags",
+    "defect_flags",
 ]

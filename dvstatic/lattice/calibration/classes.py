@@ -29,7 +29,9 @@ from .quality import patches
 from .relaxed import (
     DEFECT_RINGS,
     MIXED_SPREAD,
+    deep_nodes,
     local_spread,
+    node_degrees,
     relative_lengths,
     spread_field,
 )
@@ -116,23 +118,17 @@ def spread_classes(mesh: Mesh) -> SpreadClasses | None:
 
 
 def _class_defects(mesh: Mesh, cls: np.ndarray, n_classes: int) -> np.ndarray:
-    """Every class's defect fraction, shape (C,)."""
-    n = mesh.n_points
-    b = mesh.topology.bonds
-    degree = np.bincount(b[:, 0], None, n) + np.bincount(b[:, 1], None, n)
-    votes = np.zeros((n, n_classes))
+    """Every class's defect fraction, shape (C,), counted as
+    :func:`.relaxed.defect_fraction` counts the mesh's."""
+    degree = node_degrees(mesh)
+    votes = np.zeros((mesh.n_points, n_classes))
     np.add.at(votes, (mesh.triangles.ravel(), np.repeat(cls, 3)), 1.0)
     node_cls = np.argmax(votes, axis=1)
-    near = np.zeros(n)
-    near[mesh.boundary_nodes] = 1.0
-    step = mesh.topology.ring_step(n)
-    for _ in range(DEFECT_RINGS):
-        near = step @ near
+    deep, off = deep_nodes(mesh, DEFECT_RINGS), deep_nodes(mesh, 0)
     out = np.zeros(n_classes)
     for c in range(n_classes):  # a handful of classes
         mine = node_cls == c
-        inner = mine & (near == 0)
-        sel = inner if np.count_nonzero(inner) >= 30 else mine
+        sel = mine & deep if np.count_nonzero(mine & deep) >= 30 else mine & off
         out[c] = float(np.mean(degree[sel] != 6)) if sel.any() else 0.0
     return out
 

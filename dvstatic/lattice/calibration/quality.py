@@ -32,11 +32,13 @@ from .relaxed import spread_field
 
 __all__ = [
     "BOUNDARY_RINGS",
+    "DEFECT_MARGIN",
     "MIN_TRIANGLES",
     "QUALITY_RINGS",
     "TOLERANCE",
     "QualityFlag",
     "calibration_flags",
+    "defect_flags",
     "patches",
     "triangle_spread",
 ]
@@ -55,13 +57,17 @@ MIN_TRIANGLES = 100
 #: the samples' reach (the samples match spreads to 1 %, quantised to 0.005; random
 #: points of 150 to 500 nodes measure 0.37 to 0.39)
 REACH_MARGIN = 0.02
-#: patches are looked for this many rings away from the boundary: its cut cells,
+#: patches are looked for more than this many rings away from the boundary: its cut cells,
 #: surface springs and (on a Delaunay triangulation of raw points) the hull's slivers,
 #: up to 7 rings deep, are not the interior micro-structure, and the ring average
 #: carries them inwards (2 x QUALITY_RINGS)
 BOUNDARY_RINGS = 2 * QUALITY_RINGS
 #: a region holding more than this share of the mesh does not name a place
 WHOLE_SHARE = 0.9
+#: a calibration whose defect fraction exceeds the CVT family's at its local spread by
+#: more than this is of cells no sample family has (CVT-like meshes lie within 0.05
+#: of the family, random points on it)
+DEFECT_MARGIN = 0.15
 
 
 @dataclass(frozen=True)
@@ -70,8 +76,9 @@ class QualityFlag:
 
     Attributes
     ----------
-    kind : {"patch", "reach"}
-        A region of another local spread, or a spread beyond the samples'.
+    kind : {"patch", "reach", "defects"}
+        A region of another local spread, a spread beyond the samples', or a defect
+        fraction beyond the samples' (cells of no sample family).
     where : str
         ``"region 'name'"``, ``"the whole mesh"``, ``"class k"`` or
         ``"triangles around (x, y)"``.
@@ -79,11 +86,13 @@ class QualityFlag:
         How many triangles it holds.
     spread : float
         Its local spread (``"patch"``: the mean over its triangles of the spread
-        around them; ``"reach"``: the spread its calibration asked for).
+        around them; ``"reach"``: the spread its calibration asked for); ``"defects"``:
+        its defect fraction.
     calibrated : float
         The local spread its calibration was measured at: its sample's (``"patch"``
         in a mesh calibrated as one: the mesh's, which its sample matches to 1 %
-        unless the whole mesh is beyond reach).
+        unless the whole mesh is beyond reach); ``"defects"``: the CVT family's defect
+        fraction at its local spread.
     box : tuple of float
         Its bounding box ``(x_min, y_min, x_max, y_max)`` (mesh units).
     """
@@ -99,6 +108,14 @@ class QualityFlag:
         """The warning's text."""
         x0, y0, x1, y1 = self.box
         box = f"[{x0:.3g}, {x1:.3g}] x [{y0:.3g}, {y1:.3g}]"
+        if self.kind == "defects":
+            return (
+                f"{self.where} ({self.triangles} triangles, {box}): {self.spread:.2f} of its "
+                "interior nodes have other than six bonds, beyond the calibration samples of "
+                f"its local spread (at most {self.calibrated:.2f}, CVT-like cells): cells no "
+                "sample has (e.g. a square grid split by alternating diagonals); its moduli "
+                "may be off by several % (17 % on that grid)"
+            )
         if self.kind == "reach":
             return (
                 f"{self.where} ({self.triangles} triangles, {box}): local spread "
@@ -119,8 +136,11 @@ class QualityFlag:
             "kind": self.kind,
             "where": self.where,
             "triangles": self.triangles,
-            "local_spread": self.spread,
-            "calibrated_spread": self.calibrated,
+            **(
+                {"defect_fraction": self.spread, "family_defect_fraction": self.calibrated}
+                if self.kind == "defects"
+                else {"local_spread": self.spread, "calibrated_spread": self.calibrated}
+            ),
             "box": list(self.box),
         }
 
@@ -179,7 +199,7 @@ def triangle_spread(mesh: Mesh) -> np.ndarray:
 def patches(mesh: Mesh, calibrated, field: np.ndarray | None = None) -> list[np.ndarray]:
     """The regions of ``mesh`` (arrays of triangle indices, largest first) whose local
     spread differs from ``calibrated`` by more than :data:`TOLERANCE`: edge-connected,
-    at least :data:`MIN_TRIANGLES` triangles, :data:`BOUNDARY_RINGS` rings or more
+    at least :data:`MIN_TRIANGLES` triangles, more than :data:`BOUNDARY_RINGS` rings
     from the boundary.
 
     ``calibrated`` is a value, or one per triangle (shape (M,): a mesh calibrated by
@@ -228,6 +248,34 @@ def _reach_flags(mesh: Mesh, calibrated: np.ndarray, sample):
             float(np.median(sample[tris])),
             _box(mesh, tris),
         )
+
+
+def defect_flags(mesh: Mesh, spread: np.ndarray, defects: np.ndarray) -> list[QualityFlag]:
+    """The calibrations of ``mesh`` whose defect fraction lies more than
+    :data:`DEFECT_MARGIN` above the CVT family's at their local spread.
+
+    Parameters
+    ----------
+    mesh : Mesh
+    spread, defects : ndarray, shape (M,)
+        The local spread and the defect fraction every triangle's calibration was
+        asked for (one value for the whole mesh, or one per class).
+    """
+    from .table import family_defects
+
+    spread, defects = np.asarray(spread, dtype=float), np.asarray(defects, dtype=float)
+    flags = []
+    pairs = np.unique(np.c_[spread, defects], axis=0)
+    for s, d in pairs:  # one per class: a handful
+        limit = family_defects(float(s))
+        if not d > limit + DEFECT_MARGIN:  # NaN (no family in the table): no flag
+            continue
+        tris = np.flatnonzero((spread == s) & (defects == d))
+        where = "the whole mesh" if len(pairs) == 1 else _where(mesh, tris)
+        flags.append(
+            QualityFlag("defects", where, len(tris), float(d), float(limit), _box(mesh, tris))
+        )
+    return flags
 
 
 def _near_boundary(mesh: Mesh) -> np.ndarray:

@@ -53,9 +53,11 @@ __all__ = [
     "REV_POINTS",
     "SPREAD_STEP",
     "NU_M_LIMIT",
+    "deep_nodes",
     "defect_fraction",
     "interior_spread",
     "local_spread",
+    "node_degrees",
     "rev_for_spread",
     "sample_for",
     "relaxed_moduli",
@@ -131,8 +133,8 @@ def relative_lengths(mesh: Mesh) -> np.ndarray:
     return cache["ratio"]
 
 
-#: per mesh (weakly): the relative bond lengths, the ring step, the node degrees and
-#: the squared-deviation field smoothed over 0, 1, 2, ... rings
+#: per mesh (weakly): the relative bond lengths, the defect fraction and the
+#: squared-deviation field smoothed over 0, 1, 2, ... rings
 _FIELDS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
@@ -154,7 +156,7 @@ def local_spread(mesh: Mesh) -> float:
     return float(np.std(ratio))
 
 
-#: nodes this many rings or more from the boundary count in :func:`defect_fraction`
+#: nodes more than this many rings from the boundary count in :func:`defect_fraction`
 #: (the boundary's rows have other numbers of neighbours by construction)
 DEFECT_RINGS = 3
 
@@ -162,24 +164,42 @@ DEFECT_RINGS = 3
 def defect_fraction(mesh: Mesh) -> float:
     """The share of interior nodes with other than six bonds: 0 on a perturbed
     lattice of small moves, 0.13-0.21 on CVT-like meshes (gmsh's graded meshes,
-    Lloyd-relaxed points), 0.70 on random points. Interior: at least
+    Lloyd-relaxed points), 0.70 on random points. Interior: more than
     :data:`DEFECT_RINGS` rings from the boundary (every node of a periodic mesh; all
-    nodes off the boundary where fewer than 30 are that deep)."""
+    nodes off the boundary where fewer than 30 are that deep). Kept per mesh."""
+    cache = _FIELDS.setdefault(mesh, {})
+    if "defects" not in cache:
+        degree = node_degrees(mesh)
+        if mesh.is_periodic:
+            cache["defects"] = float(np.mean(degree != 6))
+        else:
+            inner = deep_nodes(mesh, DEFECT_RINGS)
+            if np.count_nonzero(inner) < 30:
+                inner = deep_nodes(mesh, 0)
+            cache["defects"] = float(np.mean(degree[inner] != 6)) if inner.any() else 0.0
+    return cache["defects"]
+
+
+def node_degrees(mesh: Mesh) -> np.ndarray:
+    """Every node's number of bonds, shape (N,)."""
     b = mesh.topology.bonds
     n = mesh.n_points
-    degree = np.bincount(b[:, 0], None, n) + np.bincount(b[:, 1], None, n)
+    return np.bincount(b[:, 0], None, n) + np.bincount(b[:, 1], None, n)
+
+
+def deep_nodes(mesh: Mesh, rings: int) -> np.ndarray:
+    """The nodes more than ``rings`` rings from the boundary (0: off the boundary),
+    bool, shape (N,); all nodes of a periodic mesh."""
+    n = mesh.n_points
     if mesh.is_periodic:
-        return float(np.mean(degree != 6))
+        return np.ones(n, dtype=bool)
     near = np.zeros(n)
     near[mesh.boundary_nodes] = 1.0
-    step = mesh.topology.ring_step(n)
-    off = near == 0
-    for _ in range(DEFECT_RINGS):
-        near = step @ near
-    inner = near == 0
-    if np.count_nonzero(inner) < 30:
-        inner = off
-    return float(np.mean(degree[inner] != 6)) if inner.any() else 0.0
+    if rings:
+        step = mesh.topology.ring_step(n)
+        for _ in range(rings):
+            near = step @ near
+    return near == 0
 
 
 #: a mesh whose local spread varies by more than this between its regions (10th to
@@ -203,20 +223,21 @@ def _smoothed_dev2(mesh: Mesh, rings: int) -> np.ndarray:
     if 0 not in cache:
         b = mesh.topology.bonds
         n = mesh.n_points
-        count = np.bincount(b[:, 0], None, n) + np.bincount(b[:, 1], None, n)
         dev2 = (relative_lengths(mesh) - 1.0) ** 2
         node = (np.bincount(b[:, 0], dev2, n) + np.bincount(b[:, 1], dev2, n)) / np.maximum(
-            count, 1
+            node_degrees(mesh), 1
         )
-        step = mesh.topology.ring_step(n)
-        cache.update(step=step, deg=np.asarray(step.sum(axis=1)).ravel())
+        node.setflags(write=False)
         cache[0] = node
     done = max(k for k in cache if isinstance(k, int) and k <= rings)
     node = cache[done]
-    for k in range(done + 1, rings + 1):
-        node = (cache["step"] @ node) / cache["deg"]
-        node.setflags(write=False)
-        cache[k] = node
+    if done < rings:  # the ring step is not kept (it is most of the memory)
+        step = mesh.topology.ring_step(mesh.n_points)
+        deg = np.asarray(step.sum(axis=1)).ravel()
+        for k in range(done + 1, rings + 1):
+            node = (step @ node) / deg
+            node.setflags(write=False)
+            cache[k] = node
     return node
 
 
@@ -389,6 +410,9 @@ def relaxed(
         If nu lies outside the range of nu_eff that the lattice reaches (the message
         gives the range).
     """
+    for name, value, hi in (("spread", spread, np.inf), ("defects", defects, 1.0)):
+        if value is not None and not (np.isfinite(float(value)) and 0.0 <= float(value) <= hi):
+            raise CalibrationError(f"{name} must be finite in [0, {hi:g}], got {value!r}", name)
     t0 = time.perf_counter()
     curve, ckey = moduli_curve(kind, mesh, bonds, rev_points, seed, spread, defects)
     key = (ckey, round(float(nu), 12))
@@ -431,7 +455,8 @@ def moduli_curve(
 
     A mesh without recipe gets the curve of a perturbed lattice of its local spread,
     blended with the table's CVT family at that spread by :func:`.table.family_weight`
-    of its defect fraction (uniform springs; in steps of :data:`FAMILY_STEP`): a
+    of its defect fraction (uniform and fabric-corrected springs; in steps of
+    :data:`FAMILY_STEP`): a
     CVT-like mesh (gmsh's graded meshes, Lloyd-relaxed points) relaxes less than a
     perturbed lattice of the same local spread (a CVT mesh stripped of its recipe came
     out 1.2 % stiff at a Lame bore).
@@ -453,12 +478,12 @@ def moduli_curve(
     if c is None or c.rev is not rev:
         c = _SampleCurve(kind, rev, bonds, source)
         _CURVES.put(key, c)
-    if source != "local spread" or _SAMPLE_BONDS[bonds] != "uniform":
+    if source != "local spread" or _SAMPLE_BONDS[bonds] not in table.WEIGHTINGS:
         return c, key
     raw = local_spread(mesh) if spread is None else float(spread)
     d = defect_fraction(mesh) if defects is None else float(defects)
-    w = round(table.family_weight(raw, d) / FAMILY_STEP) * FAMILY_STEP
-    family = table.family_curve(kind, skey[1]) if w > 0 else None
+    w = round(round(table.family_weight(raw, d) / FAMILY_STEP) * FAMILY_STEP, 4)
+    family = table.family_curve(kind, skey[1], _SAMPLE_BONDS[bonds]) if w > 0 else None
     if family is None:
         return c, key
     bkey = (*key, "cvt family", round(w, 4))

@@ -8,9 +8,9 @@ on large periodic samples with the stabilised coupling. It is made by
 ``nu_m``, cubic in the jitter).
 
 It also holds the *CVT family* (``calibration_table.py --cvt-family``): random points
-Lloyd-relaxed 0 to 480 times, from local spread 0.365 (random) down to 0.051, with
+Lloyd-relaxed 0 to 480 times, from local spread 0.366 (random) down to 0.052, with
 every member's local spread and defect fraction (interior nodes with other than six
-neighbours: 0.70 down to 0.13), and the defect fractions of perturbed lattices (none up
+neighbours: 0.71 down to 0.14), and the defect fractions of perturbed lattices (none up
 to a local spread of 0.13). A mesh without recipe lies between the two families
 (gmsh's graded meshes near the CVT one, its uniform meshes near the perturbed
 lattices): :func:`family_weight` says where, :func:`family_curve` gives the CVT
@@ -34,7 +34,9 @@ __all__ = [
     "WEIGHTINGS",
     "load",
     "curve",
+    "FAMILY_GAP",
     "family_curve",
+    "family_defects",
     "family_weight",
     "TableCurve",
 ]
@@ -43,6 +45,9 @@ TABLE_FILE = "relaxed_table.json"
 #: spring weightings of the samples in the table: uniform springs (the "surface" and
 #: "uniform" schemes) and fabric-corrected ones (the "fabric" scheme; point-set recipes)
 WEIGHTINGS = ("uniform", "fabric")
+#: below this difference of the two families' defect fractions the CVT weight tapers
+#: to 0 (they meet at random points)
+FAMILY_GAP = 0.05
 #: interpolated curves by (model, recipe)
 _CURVES = Bounded("calibration table curves", maxsize=64)
 
@@ -152,22 +157,26 @@ def _family() -> dict | None:
     return None if data is None else data.get("cvt_family")
 
 
-def family_curve(kind: str, spread: float) -> TableCurve | None:
+def family_curve(kind: str, spread: float, weighting: str = "uniform") -> TableCurve | None:
     """The CVT family's relaxed curve at local spread ``spread`` (linear in the spread
-    between the two members around it; clamped to the family's range, 0.051 to
-    0.365), or None without the family in the table."""
+    between the two members around it; clamped to the family's range, 0.052 to
+    0.366) for a spring weighting of :data:`WEIGHTINGS`, or None without it in the
+    table."""
     fam = _family()
-    if fam is None or kind not in fam:
+    curves = None if fam is None else fam if weighting == "uniform" else fam.get(weighting)
+    if curves is None or kind not in curves:
         return None
     s = np.asarray(fam["spread"], dtype=float)
     order = np.argsort(s)
     s = s[order]
-    nu = np.asarray(fam[kind]["nu"], dtype=float)[order]
-    E = np.asarray(fam[kind]["E"], dtype=float)[order]
+    nu = np.asarray(curves[kind]["nu"], dtype=float)[order]
+    E = np.asarray(curves[kind]["E"], dtype=float)[order]
     x = float(np.clip(spread, s[0], s[-1]))
     j = int(np.clip(np.searchsorted(s, x), 1, len(s) - 1))
     t = (x - s[j - 1]) / (s[j] - s[j - 1])
     what = f"the CVT family at local spread {x:.3f}"
+    if weighting != "uniform":
+        what += f", {weighting}-corrected springs"
     nu_m = np.asarray(fam["nu_m"], dtype=float)
     nu_x, e_x = (1 - t) * nu[j - 1] + t * nu[j], (1 - t) * E[j - 1] + t * E[j]
     return TableCurve(nu_m, nu_x, e_x, what, fam)
@@ -177,8 +186,9 @@ def family_weight(spread: float, defects: float) -> float:
     """Where a micro-structure of local spread ``spread`` and defect fraction
     ``defects`` lies between the perturbed lattices (0) and the CVT family (1) of the
     same local spread: ``(d - d_perturbed(s)) / (d_cvt(s) - d_perturbed(s))``, clipped
-    to [0, 1]; 0 without the family in the table, or where the two families' defect
-    fractions differ by less than 0.02 (random points, where both meet)."""
+    to [0, 1] and tapered linearly to 0 where the two families' defect fractions differ
+    by less than :data:`FAMILY_GAP` (towards random points, where both meet); 0
+    without the family in the table."""
     fam = _family()
     if fam is None:
         return 0.0
@@ -192,8 +202,22 @@ def family_weight(spread: float, defects: float) -> float:
     # the CVT family's first member
     rnd = int(np.argmax(fam["spread"]))
     pert = fam["perturbed"]
-    d_cvt = at(fam["spread"], fam["defects"])
+    d_cvt = family_defects(spread)
     d_pert = at([*pert["spread"], fam["spread"][rnd]], [*pert["defects"], fam["defects"][rnd]])
-    if d_cvt - d_pert < 0.02:
+    gap = d_cvt - d_pert
+    if gap <= 0:
         return 0.0
-    return float(np.clip((defects - d_pert) / (d_cvt - d_pert), 0.0, 1.0))
+    # tapered to 0 where the families meet (a gap below FAMILY_GAP), without a jump
+    taper = min(gap / FAMILY_GAP, 1.0)
+    return float(np.clip((defects - d_pert) / gap, 0.0, 1.0) * taper)
+
+
+def family_defects(spread: float) -> float:
+    """The CVT family's defect fraction at local spread ``spread`` (interpolated,
+    clamped to the family's ends; NaN without the family in the table)."""
+    fam = _family()
+    if fam is None:
+        return float("nan")
+    s = np.asarray(fam["spread"], dtype=float)
+    order = np.argsort(s)
+    return float(np.interp(spread, s[order], np.asarray(fam["defects"], dtype=float)[order]))
