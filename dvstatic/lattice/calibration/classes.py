@@ -1,10 +1,10 @@
 """Meshes that mix micro-structures, calibrated class by class.
 
 A mesh without a generator recipe is calibrated on a periodic sample with its local
-bond-length spread (:func:`.relaxed.local_spread`). Where its regions differ in
+bond-length spread (:func:`.descriptors.local_spread`). Where its regions differ in
 micro-structure (a structured region beside an unstructured one: the spread around
-each node, :func:`.relaxed.spread_field`, varies by more than
-:data:`.relaxed.MIXED_SPREAD` from its 10th to its 90th percentile), one spread serves
+each node, :func:`.descriptors.spread_field`, varies by more than
+:data:`.descriptors.MIXED_SPREAD` from its 10th to its 90th percentile), one spread serves
 none of them: a regular lattice beside random points (3,845 nodes, uniaxial tension)
 came out 8 % stiff on the lattice side and 2 % soft on the random side, 5.2 % (L2) from
 P2 on the same triangles. Such a mesh's triangles are sorted into classes of their local
@@ -25,8 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...mesh import Mesh
-from .quality import patches
-from .relaxed import (
+from .descriptors import (
     DEFECT_RINGS,
     MIXED_SPREAD,
     deep_nodes,
@@ -35,6 +34,7 @@ from .relaxed import (
     relative_lengths,
     spread_field,
 )
+from .quality import patches
 
 __all__ = [
     "CLASS_WIDTH",
@@ -62,12 +62,12 @@ class SpreadClasses:
         Every triangle's class.
     spread : ndarray, shape (C,)
         Every class's local spread: the standard deviation of the relative bond
-        lengths (:func:`.relaxed.relative_lengths`) of the bonds inside it.
+        lengths (:func:`.descriptors.relative_lengths`) of the bonds inside it.
     field : ndarray, shape (M,)
         The local spread around every triangle (the mean of its nodes'
-        :func:`.relaxed.spread_field`) the classes were cut from.
+        :func:`.descriptors.spread_field`) the classes were cut from.
     defects : ndarray, shape (C,)
-        Every class's defect fraction (:func:`.relaxed.defect_fraction`): the share of
+        Every class's defect fraction (:func:`.descriptors.defect_fraction`): the share of
         its interior nodes (a node belongs to the class of most of its triangles) with
         other than six bonds.
     """
@@ -84,7 +84,7 @@ class SpreadClasses:
 
 def spread_classes(mesh: Mesh) -> SpreadClasses | None:
     """The local-spread classes of a mesh without a reproducible recipe that mixes
-    micro-structures (regions whose spread differs: :data:`.relaxed.MIXED_SPREAD`
+    micro-structures (regions whose spread differs: :data:`.descriptors.MIXED_SPREAD`
     between the node field's 10th and 90th percentiles, or a patch,
     :func:`.quality.patches`); None for a mesh of one micro-structure (or with a
     recipe, or periodic), which one sample serves."""
@@ -119,7 +119,7 @@ def spread_classes(mesh: Mesh) -> SpreadClasses | None:
 
 def _class_defects(mesh: Mesh, cls: np.ndarray, n_classes: int) -> np.ndarray:
     """Every class's defect fraction, shape (C,), counted as
-    :func:`.relaxed.defect_fraction` counts the mesh's."""
+    :func:`.descriptors.defect_fraction` counts the mesh's."""
     degree = node_degrees(mesh)
     votes = np.zeros((mesh.n_points, n_classes))
     np.add.at(votes, (mesh.triangles.ravel(), np.repeat(cls, 3)), 1.0)

@@ -1,7 +1,7 @@
 """Where a mesh's micro-structure lies outside what its calibration was measured on.
 
 A mesh without a generator recipe is calibrated on periodic samples of its *local
-spread* (:func:`.relaxed.local_spread`: the spread of the bond lengths relative to the
+spread* (:func:`.descriptors.local_spread`: the spread of the bond lengths relative to the
 local spacing), one sample for the whole mesh or one per class of a mesh that mixes
 micro-structures (:mod:`.classes`). Two things put a part of such a mesh outside what
 its sample measured:
@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...mesh import Mesh
-from .relaxed import spread_field
+from .descriptors import spread_field
 
 __all__ = [
     "BOUNDARY_RINGS",
@@ -192,7 +192,7 @@ def calibration_flags(
 
 def triangle_spread(mesh: Mesh) -> np.ndarray:
     """The local spread around every triangle, shape (M,): the mean over its nodes of
-    :func:`.relaxed.spread_field` over :data:`QUALITY_RINGS` rings."""
+    :func:`.descriptors.spread_field` over :data:`QUALITY_RINGS` rings."""
     return spread_field(mesh, rings=QUALITY_RINGS)[mesh.triangles].mean(axis=1)
 
 

@@ -1,0 +1,171 @@
+"""Descriptors of a mesh's micro-structure, read by the relaxed calibration
+(:mod:`.relaxed`), its classes (:mod:`.classes`) and its quality flags
+(:mod:`.quality`).
+
+* the **local spread** (:func:`local_spread`): the spread of the bond lengths relative
+  to the local spacing (scale-free: a graded mesh of regular cells scores as its cells),
+  and its field around every node (:func:`spread_field`);
+* the **defect fraction** (:func:`defect_fraction`): the share of interior nodes with
+  other than six bonds (0 on perturbed lattices, 0.14-0.21 on CVT-like cells, 0.70 on
+  random points).
+
+The per-mesh values are kept (weakly) for the mesh's life: meshes are immutable.
+"""
+
+from __future__ import annotations
+
+import weakref
+
+import numpy as np
+
+from ...mesh import Mesh
+
+__all__ = [
+    "DEFECT_RINGS",
+    "MIXED_SPREAD",
+    "deep_nodes",
+    "defect_fraction",
+    "interior_spread",
+    "local_spread",
+    "node_degrees",
+    "relative_lengths",
+    "spread_field",
+]
+
+
+def interior_spread(mesh: Mesh) -> float:
+    """sigma_L over the bonds whose end nodes are both off the boundary."""
+    lengths = mesh.bond_lengths()
+    if not mesh.is_periodic:
+        bnd = np.zeros(mesh.n_points, dtype=bool)
+        bnd[mesh.boundary_nodes] = True
+        b = mesh.topology.bonds
+        inner = ~(bnd[b[:, 0]] | bnd[b[:, 1]])
+        if inner.sum() >= 30:
+            lengths = lengths[inner]
+    return float(np.std(lengths) / np.mean(lengths))
+
+
+def relative_lengths(mesh: Mesh) -> np.ndarray:
+    """Every bond's length over the mean of the mean bond lengths at its two nodes,
+    shape (n_bonds,) (kept per mesh, read-only)."""
+    cache = _FIELDS.setdefault(mesh, {})
+    if "ratio" not in cache:
+        b = mesh.topology.bonds
+        lengths = mesh.bond_lengths()
+        n = mesh.n_points
+        total = np.bincount(b[:, 0], lengths, n) + np.bincount(b[:, 1], lengths, n)
+        count = np.bincount(b[:, 0], None, n) + np.bincount(b[:, 1], None, n)
+        h = total / np.maximum(count, 1)
+        ratio = lengths / (0.5 * (h[b[:, 0]] + h[b[:, 1]]))
+        ratio.setflags(write=False)
+        cache["ratio"] = ratio
+    return cache["ratio"]
+
+
+#: per mesh (weakly): the relative bond lengths, the defect fraction and the
+#: squared-deviation field smoothed over 0, 1, 2, ... rings
+_FIELDS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def local_spread(mesh: Mesh) -> float:
+    """The spread of the bond lengths relative to the local spacing: the standard
+    deviation, over the interior bonds (both end nodes off the boundary; all bonds if
+    fewer than 30), of every bond's length divided by the mean of the mean bond lengths
+    at its two nodes. Scale-free, so a graded mesh of regular cells scores as its
+    cells do, not as its grading."""
+    b = mesh.topology.bonds
+    n = mesh.n_points
+    ratio = relative_lengths(mesh)
+    if not mesh.is_periodic:
+        bnd = np.zeros(n, dtype=bool)
+        bnd[mesh.boundary_nodes] = True
+        inner = ~(bnd[b[:, 0]] | bnd[b[:, 1]])
+        if inner.sum() >= 30:
+            ratio = ratio[inner]
+    return float(np.std(ratio))
+
+
+#: nodes more than this many rings from the boundary count in :func:`defect_fraction`
+#: (the boundary's rows have other numbers of neighbours by construction)
+DEFECT_RINGS = 3
+
+
+def defect_fraction(mesh: Mesh) -> float:
+    """The share of interior nodes with other than six bonds: 0 on a perturbed
+    lattice of small moves, 0.13-0.21 on CVT-like meshes (gmsh's graded meshes,
+    Lloyd-relaxed points), 0.70 on random points. Interior: more than
+    :data:`DEFECT_RINGS` rings from the boundary (every node of a periodic mesh; all
+    nodes off the boundary where fewer than 30 are that deep). Kept per mesh."""
+    cache = _FIELDS.setdefault(mesh, {})
+    if "defects" not in cache:
+        degree = node_degrees(mesh)
+        if mesh.is_periodic:
+            cache["defects"] = float(np.mean(degree != 6))
+        else:
+            inner = deep_nodes(mesh, DEFECT_RINGS)
+            if np.count_nonzero(inner) < 30:
+                inner = deep_nodes(mesh, 0)
+            cache["defects"] = float(np.mean(degree[inner] != 6)) if inner.any() else 0.0
+    return cache["defects"]
+
+
+def node_degrees(mesh: Mesh) -> np.ndarray:
+    """Every node's number of bonds, shape (N,)."""
+    b = mesh.topology.bonds
+    n = mesh.n_points
+    return np.bincount(b[:, 0], None, n) + np.bincount(b[:, 1], None, n)
+
+
+def deep_nodes(mesh: Mesh, rings: int) -> np.ndarray:
+    """The nodes more than ``rings`` rings from the boundary (0: off the boundary),
+    bool, shape (N,); all nodes of a periodic mesh."""
+    n = mesh.n_points
+    if mesh.is_periodic:
+        return np.ones(n, dtype=bool)
+    near = np.zeros(n)
+    near[mesh.boundary_nodes] = 1.0
+    if rings:
+        step = mesh.topology.ring_step(n)
+        for _ in range(rings):
+            near = step @ near
+    return near == 0
+
+
+#: a mesh whose local spread varies by more than this between its regions (10th to
+#: 90th percentile of the node field) mixes micro-structures: the models calibrate it
+#: class by class (:mod:`.classes`; measured: 0.07 on a gmsh plate graded 0.04 -> 0.24,
+#: 0.40 on a lattice beside random points)
+MIXED_SPREAD = 0.15
+
+
+def spread_field(mesh: Mesh, rings: int = 2) -> np.ndarray:
+    """The local spread around every node, shape (N,): the rms deviation from 1 of the
+    relative lengths (as in :func:`local_spread`) of the bonds within ``rings`` rings.
+
+    Kept per mesh (the classes, their trigger and the calibration flags read 2 and 4
+    rings of the same field: each ring is smoothed once)."""
+    return np.sqrt(_smoothed_dev2(mesh, rings))
+
+
+def _smoothed_dev2(mesh: Mesh, rings: int) -> np.ndarray:
+    cache = _FIELDS.setdefault(mesh, {})
+    if 0 not in cache:
+        b = mesh.topology.bonds
+        n = mesh.n_points
+        dev2 = (relative_lengths(mesh) - 1.0) ** 2
+        node = (np.bincount(b[:, 0], dev2, n) + np.bincount(b[:, 1], dev2, n)) / np.maximum(
+            node_degrees(mesh), 1
+        )
+        node.setflags(write=False)
+        cache[0] = node
+    done = max(k for k in cache if isinstance(k, int) and k <= rings)
+    node = cache[done]
+    if done < rings:  # the ring step is not kept (it is most of the memory)
+        step = mesh.topology.ring_step(mesh.n_points)
+        deg = np.asarray(step.sum(axis=1)).ravel()
+        for k in range(done + 1, rings + 1):
+            node = (step @ node) / deg
+            node.setflags(write=False)
+            cache[k] = node
+    return node
