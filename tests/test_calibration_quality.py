@@ -227,17 +227,43 @@ def test_the_fracture_criteria_do_not_warn_again(caplog):
     assert len(warned) == len(model.calibration_flags) >= 1
 
 
-def test_cells_of_no_sample_family_are_named_in_a_warning(caplog):
-    x, y = np.meshgrid(np.linspace(0, 2, 61), np.linspace(0, 1, 31))
+def square_grid(alternate: bool, nx: int = 60, ny: int = 30) -> dv.Mesh:
+    """A 2 x 1 grid of squares, each split by a diagonal: alternating (every node with 4
+    or 8 bonds) or parallel (6 bonds, all diagonals along one direction)."""
+    x, y = np.meshgrid(np.linspace(0, 2, nx + 1), np.linspace(0, 1, ny + 1))
     p = np.c_[x.ravel(), y.ravel()]
     tri = []
-    for j in range(30):
-        for i in range(60):
-            a, b, c, d = j * 61 + i, j * 61 + i + 1, (j + 1) * 61 + i + 1, (j + 1) * 61 + i
-            tri += [[a, b, d], [b, c, d]] if (i + j) % 2 else [[a, b, c], [a, c, d]]
-    model = dv.DV(dv.Mesh(p, np.array(tri)), E, NU)  # alternating diagonals: 4 or 8 bonds
+    for j in range(ny):
+        for i in range(nx):
+            a, b = j * (nx + 1) + i, j * (nx + 1) + i + 1
+            c, d = (j + 1) * (nx + 1) + i + 1, (j + 1) * (nx + 1) + i
+            tri += [[a, b, d], [b, c, d]] if alternate and (i + j) % 2 else [[a, b, c], [a, c, d]]
+    return dv.Mesh(p, np.array(tri))
+
+
+def test_cells_of_no_sample_family_are_named_in_a_warning(caplog):
+    model = dv.DV(square_grid(alternate=True), E, NU)
     with caplog.at_level(logging.WARNING, logger="dvstatic.lattice.models"):
         (flag,) = model.calibration_flags
     assert flag.kind == "defects" and flag.where == "the whole mesh" and flag.spread == 1.0
     assert "other than six bonds" in flag.message()
     assert dv.DV(patch_mesh(), E, NU).calibration_flags == ()  # lattice beside random
+
+
+def test_an_anisotropic_fabric_is_named_in_a_warning():
+    from dvstatic.lattice.calibration import anisotropy_flags
+    from dvstatic.lattice.calibration.quality import ANISOTROPY
+
+    model = dv.DV(square_grid(alternate=False), E, NU)  # 9 % soft along x at 5,151 nodes
+    (flag,) = model.calibration_flags
+    assert flag.kind == "anisotropy" and flag.where == "the whole mesh"
+    assert flag.spread == pytest.approx(0.25) and "anisotropic" in flag.message()
+    for kind in ("random", "cvt", "jittered"):  # deviators up to 0.16 at single nodes
+        r = dv.mesh.rectangle(2, 1, 0.01, kind=kind, seed=4)
+        assert anisotropy_flags(dv.Mesh(r.points, r.triangles)) == [], kind
+    assert ANISOTROPY < 0.25
+
+
+def test_the_fabric_correction_refuses_a_fabric_it_cannot_correct():
+    with pytest.raises(ValueError, match="too anisotropic near"):
+        _ = dv.DV(square_grid(alternate=False), E, NU, bonds="fabric").operator

@@ -370,6 +370,7 @@ class VoronoiModel:
         if all("defect_fraction" in d for d in details):
             defects = np.array([d["defect_fraction"] for d in details])[idx]
             flags = flags + tuple(calibration.defect_flags(self.mesh, asked[idx], defects))
+        flags = flags + tuple(calibration.anisotropy_flags(self.mesh))
         for f in flags:
             log.warning("calibration: %s", f.message())
         return flags

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._checks import check_choice
+from ..errors import InputError
 from ..mesh import Mesh
 from . import geometry as _geometry
 from .geometry import Geometry
@@ -12,10 +13,12 @@ from .geometry import Geometry
 __all__ = [
     "BONDS",
     "MIN_WEIGHT",
+    "FABRIC_MIN",
     "FABRIC_RINGS",
     "voronoi_weights",
     "surface_weights",
     "fabric_factors",
+    "node_fabric",
     "bond_weights",
 ]
 
@@ -27,6 +30,9 @@ BONDS = ("surface", "fabric", "uniform", "voronoi")
 MIN_WEIGHT = 0.05
 #: the fabric is averaged over this many rings of neighbours (about this many spacings)
 FABRIC_RINGS = 6
+#: the fabric correction refuses a mesh whose springs it would scale below this (a
+#: fabric deviator of about 0.22; CVT and random points reach 0.07 and 0.16)
+FABRIC_MIN = 0.1
 
 
 def voronoi_weights(geom: Geometry) -> np.ndarray:
@@ -61,17 +67,47 @@ def fabric_factors(mesh: Mesh, weights: np.ndarray, rings: int = FABRIC_RINGS) -
         Spring weights to correct (:func:`surface_weights`).
     rings : int
         Averaging scale, in rings of neighbours.
+
+    Raises
+    ------
+    InputError
+        Where a factor would fall below :data:`FABRIC_MIN` (a fabric too anisotropic
+        to correct: the message says where).
     """
-    g = _geometry.of(mesh)
     b = mesh.topology.bonds
+    d = _geometry.of(mesh).direction
+    a = node_fabric(mesh, weights, rings)
+    a = 0.5 * (a[b[:, 0]] + a[b[:, 1]])
+    half = 0.5 * (a[:, 0] - a[:, 2])  # the deviator is [[half, a01], [a01, -half]]
+    q = (d[:, 0] ** 2 - d[:, 1] ** 2) * half + 2.0 * d[:, 0] * d[:, 1] * a[:, 1]
+    factors = 1.0 - 4.0 * q
+    low = int(np.argmin(factors))
+    if factors[low] < FABRIC_MIN:
+        x, y = mesh.points[b[low]].mean(axis=0)
+        raise InputError(
+            f"bonds='fabric' cannot correct this mesh's fabric: it is too anisotropic near "
+            f"({x:.4g}, {y:.4g}) (deviator {np.hypot(half[low], a[low, 1]):.3f}; the "
+            f"correction needs less than about {(1 - FABRIC_MIN) / 4:.3f}), its springs "
+            "there would fall to "
+            f"{factors[low]:.3g} of theirs (a square grid split by parallel diagonals: "
+            "0.25); use bonds='surface' (and expect anisotropic moduli) or remesh",
+            "bonds",
+        )
+    return factors
+
+
+def node_fabric(mesh: Mesh, weights: np.ndarray, rings: int = FABRIC_RINGS) -> np.ndarray:
+    """The springs' fabric tensor ``a = sum w l^2 n n / sum w l^2`` around every node,
+    ``(a_xx, a_xy, a_yy)``, shape (N, 3): every triangle's share of the springs (all
+    three edges; triangles with a boundary edge take no part), summed over the
+    triangles within ``rings`` rings (see :func:`fabric_factors`). Isotropic: a_xx =
+    a_yy = 1/2, a_xy = 0."""
+    g = _geometry.of(mesh)
     n = mesh.n_points
-    d = g.direction
-    # every triangle's share of the springs, all three edges, but the triangles on the
-    # boundary (cut to fit it: their fabric is the boundary's, not the cells')
     tb = mesh.topology.tri_bonds
     w = g.tri_weight * np.asarray(weights, dtype=float)[tb] * g.tri_l**2
     w[(mesh.topology.n_tris_per_bond[tb] == 1).any(axis=1)] = 0.0
-    dt = d[tb]
+    dt = g.direction[tb]
     parts = np.stack([w * dt[..., 0] ** 2, w * dt[..., 0] * dt[..., 1], w * dt[..., 1] ** 2, w])
     tri = parts.sum(axis=2).T  # (m, 4)
     node = np.zeros((n, 4))
@@ -80,11 +116,7 @@ def fabric_factors(mesh: Mesh, weights: np.ndarray, rings: int = FABRIC_RINGS) -
     step = mesh.topology.ring_step(n)
     for _ in range(rings):
         node = step @ node
-    a = node[:, :3] / np.maximum(node[:, 3:], np.finfo(float).tiny)
-    a = 0.5 * (a[b[:, 0]] + a[b[:, 1]])
-    half = 0.5 * (a[:, 0] - a[:, 2])  # the deviator is [[half, a01], [a01, -half]]
-    q = (d[:, 0] ** 2 - d[:, 1] ** 2) * half + 2.0 * d[:, 0] * d[:, 1] * a[:, 1]
-    return 1.0 - 4.0 * q
+    return node[:, :3] / np.maximum(node[:, 3:], np.finfo(float).tiny)
 
 
 def bond_weights(scheme: str, mesh: Mesh) -> np.ndarray:

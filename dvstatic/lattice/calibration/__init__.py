@@ -18,7 +18,7 @@ from .paper import (
     paper,
     paper_from_moments,
 )
-from .quality import QualityFlag, calibration_flags, defect_flags
+from .quality import QualityFlag, anisotropy_flags, calibration_flags, defect_flags
 from .relaxed import (
     REV_POINTS,
     SPREAD_STEP,
@@ -51,6 +51,7 @@ __all__ = [
     "calibrate_classes",
     "spread_classes",
     "QualityFlag",
+    "anisotropy_flags",
     "calibration_flags",
     "defect_flags",
 ]

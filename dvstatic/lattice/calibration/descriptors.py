@@ -7,7 +7,10 @@
   and its field around every node (:func:`spread_field`);
 * the **defect fraction** (:func:`defect_fraction`): the share of interior nodes with
   other than six bonds (0 on perturbed lattices, 0.14-0.21 on CVT-like cells, 0.70 on
-  random points).
+  random points);
+* the **fabric anisotropy** (:func:`fabric_anisotropy`): the deviator of the bonds'
+  fabric tensor around every node (0 on a regular lattice, at most 0.07 on CVT, 0.16 on
+  random points, 0.25 on a square grid split by parallel diagonals).
 
 The per-mesh values are kept (weakly) for the mesh's life: meshes are immutable.
 """
@@ -19,12 +22,14 @@ import weakref
 import numpy as np
 
 from ...mesh import Mesh
+from ..weights import FABRIC_RINGS, node_fabric
 
 __all__ = [
     "DEFECT_RINGS",
     "MIXED_SPREAD",
     "deep_nodes",
     "defect_fraction",
+    "fabric_anisotropy",
     "interior_spread",
     "local_spread",
     "node_degrees",
@@ -169,3 +174,14 @@ def _smoothed_dev2(mesh: Mesh, rings: int) -> np.ndarray:
             node.setflags(write=False)
             cache[k] = node
     return node
+
+
+def fabric_anisotropy(mesh: Mesh, rings: int = FABRIC_RINGS) -> np.ndarray:
+    """The magnitude of the deviator of the bonds' fabric tensor
+    (:func:`..weights.node_fabric`, uniform springs, over ``rings`` rings) around every
+    node, shape (N,): 0 for an isotropic fabric, 0.5 for bonds all along one direction.
+    Measured (largest node value more than 8 rings from the boundary): regular lattice
+    0, jittered 0.016, CVT 0.070, random points 0.159, gmsh meshes 0.012-0.067, a square
+    grid split by parallel diagonals 0.25 (alternating diagonals: 0)."""
+    a = node_fabric(mesh, np.ones(mesh.n_bonds), rings)
+    return np.hypot(0.5 * (a[:, 0] - a[:, 2]), a[:, 1])

@@ -31,6 +31,7 @@ from ...mesh import Mesh
 from .descriptors import spread_field
 
 __all__ = [
+    "ANISOTROPY",
     "BOUNDARY_RINGS",
     "DEFECT_MARGIN",
     "MIN_TRIANGLES",
@@ -38,6 +39,7 @@ __all__ = [
     "TOLERANCE",
     "QualityFlag",
     "calibration_flags",
+    "anisotropy_flags",
     "defect_flags",
     "patches",
     "triangle_spread",
@@ -64,6 +66,11 @@ REACH_MARGIN = 0.02
 BOUNDARY_RINGS = 2 * QUALITY_RINGS
 #: a region holding more than this share of the mesh does not name a place
 WHOLE_SHARE = 0.9
+#: a region whose bonds' fabric deviator (:func:`.descriptors.fabric_anisotropy`)
+#: exceeds this is anisotropic beyond what an isotropic calibration describes (random
+#: points reach 0.16 at single nodes, a square grid split by parallel diagonals is 0.25
+#: everywhere and 9 % soft along its axes)
+ANISOTROPY = 0.2
 #: a calibration whose defect fraction exceeds the CVT family's at its local spread by
 #: more than this is of cells no sample family has (CVT-like meshes lie within 0.05
 #: of the family, random points on it)
@@ -76,9 +83,10 @@ class QualityFlag:
 
     Attributes
     ----------
-    kind : {"patch", "reach", "defects"}
-        A region of another local spread, a spread beyond the samples', or a defect
-        fraction beyond the samples' (cells of no sample family).
+    kind : {"patch", "reach", "defects", "anisotropy"}
+        A region of another local spread, a spread beyond the samples', a defect
+        fraction beyond the samples' (cells of no sample family), or an anisotropic
+        fabric.
     where : str
         ``"region 'name'"``, ``"the whole mesh"``, ``"class k"`` or
         ``"triangles around (x, y)"``.
@@ -108,6 +116,15 @@ class QualityFlag:
         """The warning's text."""
         x0, y0, x1, y1 = self.box
         box = f"[{x0:.3g}, {x1:.3g}] x [{y0:.3g}, {y1:.3g}]"
+        if self.kind == "anisotropy":
+            return (
+                f"{self.where} ({self.triangles} triangles, {box}): the fabric of its bonds "
+                f"is anisotropic (deviator {self.spread:.3f}, above {self.calibrated:.2f}; "
+                "e.g. a square grid split by parallel diagonals, 0.25): the lattice there "
+                "is stiffer along some directions than others, which an isotropic "
+                "calibration cannot match (that grid: 9 % soft along its axes); remesh "
+                "with unstructured cells"
+            )
         if self.kind == "defects":
             return (
                 f"{self.where} ({self.triangles} triangles, {box}): {self.spread:.2f} of its "
@@ -248,6 +265,29 @@ def _reach_flags(mesh: Mesh, calibrated: np.ndarray, sample):
             float(np.median(sample[tris])),
             _box(mesh, tris),
         )
+
+
+def anisotropy_flags(mesh: Mesh) -> list[QualityFlag]:
+    """The regions of ``mesh`` whose fabric deviator exceeds :data:`ANISOTROPY`
+    (edge-connected, at least :data:`MIN_TRIANGLES` triangles, more than
+    :data:`BOUNDARY_RINGS` rings from the boundary), largest first."""
+    from .descriptors import fabric_anisotropy
+
+    tri = fabric_anisotropy(mesh)[mesh.triangles].mean(axis=1)
+    inner = ~_near_boundary(mesh)
+    found = _clusters(mesh, (tri > ANISOTROPY) & inner)
+    whole = len(found) == 1 and len(found[0]) > WHOLE_SHARE * np.count_nonzero(inner)
+    return [
+        QualityFlag(
+            "anisotropy",
+            "the whole mesh" if whole else _where(mesh, tris),
+            len(tris),
+            float(tri[tris].mean()),
+            ANISOTROPY,
+            _box(mesh, tris),
+        )
+        for tris in found
+    ]
 
 
 def defect_flags(mesh: Mesh, spread: np.ndarray, defects: np.ndarray) -> list[QualityFlag]:
