@@ -34,6 +34,7 @@ __all__ = [
     "local_spread",
     "node_degrees",
     "relative_lengths",
+    "ring_mean",
     "spread_field",
 ]
 
@@ -68,8 +69,8 @@ def relative_lengths(mesh: Mesh) -> np.ndarray:
     return cache["ratio"]
 
 
-#: per mesh (weakly): the relative bond lengths, the defect fraction and the
-#: squared-deviation field smoothed over 0, 1, 2, ... rings
+#: per mesh (weakly): the relative bond lengths, the defect fraction, the deep nodes
+#: and the squared-deviation field smoothed over 0 and more rings
 _FIELDS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
@@ -124,17 +125,36 @@ def node_degrees(mesh: Mesh) -> np.ndarray:
 
 def deep_nodes(mesh: Mesh, rings: int) -> np.ndarray:
     """The nodes more than ``rings`` rings from the boundary (0: off the boundary),
-    bool, shape (N,); all nodes of a periodic mesh."""
-    n = mesh.n_points
-    if mesh.is_periodic:
-        return np.ones(n, dtype=bool)
-    near = np.zeros(n)
-    near[mesh.boundary_nodes] = 1.0
+    bool, shape (N,), read-only; all nodes of a periodic mesh. Kept per mesh."""
+    cache = _FIELDS.setdefault(mesh, {})
+    key = ("deep", int(rings))
+    if key not in cache:
+        n = mesh.n_points
+        if mesh.is_periodic:
+            deep = np.ones(n, dtype=bool)
+        else:
+            near = np.zeros(n)
+            near[mesh.boundary_nodes] = 1.0
+            if rings:
+                step = mesh.topology.ring_step(n)
+                for _ in range(rings):
+                    near = step @ near
+            deep = near == 0
+        deep.setflags(write=False)
+        cache[key] = deep
+    return cache[key]
+
+
+def ring_mean(mesh: Mesh, node_values: np.ndarray, rings: int) -> np.ndarray:
+    """``node_values`` (N,) averaged ``rings`` times over every node and its
+    neighbours, shape (N,)."""
+    node = np.asarray(node_values, dtype=float)
     if rings:
-        step = mesh.topology.ring_step(n)
+        step = mesh.topology.ring_step(mesh.n_points)
+        deg = np.asarray(step.sum(axis=1)).ravel()
         for _ in range(rings):
-            near = step @ near
-    return near == 0
+            node = (step @ node) / deg
+    return node
 
 
 #: a mesh whose local spread varies by more than this between its regions (10th to
@@ -165,15 +185,11 @@ def _smoothed_dev2(mesh: Mesh, rings: int) -> np.ndarray:
         node.setflags(write=False)
         cache[0] = node
     done = max(k for k in cache if isinstance(k, int) and k <= rings)
-    node = cache[done]
     if done < rings:  # the ring step is not kept (it is most of the memory)
-        step = mesh.topology.ring_step(mesh.n_points)
-        deg = np.asarray(step.sum(axis=1)).ravel()
-        for k in range(done + 1, rings + 1):
-            node = (step @ node) / deg
-            node.setflags(write=False)
-            cache[k] = node
-    return node
+        node = ring_mean(mesh, cache[done], rings - done)
+        node.setflags(write=False)
+        cache[rings] = node
+    return cache[rings]
 
 
 def fabric_anisotropy(mesh: Mesh, rings: int = FABRIC_RINGS) -> np.ndarray:

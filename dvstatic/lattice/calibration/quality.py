@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...mesh import Mesh
-from .descriptors import spread_field
+from .descriptors import deep_nodes, ring_mean, spread_field
 
 __all__ = [
     "ANISOTROPY",
@@ -238,11 +238,7 @@ def _ring_rms(mesh: Mesh, per_triangle: np.ndarray) -> np.ndarray:
     tri = mesh.triangles.ravel()
     sq = np.repeat(per_triangle**2, 3)
     node = np.bincount(tri, sq, n) / np.maximum(np.bincount(tri, None, n), 1)
-    step = mesh.topology.ring_step(n)
-    deg = np.asarray(step.sum(axis=1)).ravel()
-    for _ in range(QUALITY_RINGS):
-        node = (step @ node) / deg
-    return np.sqrt(node)[mesh.triangles].mean(axis=1)
+    return np.sqrt(ring_mean(mesh, node, QUALITY_RINGS))[mesh.triangles].mean(axis=1)
 
 
 def _reach_flags(mesh: Mesh, calibrated: np.ndarray, sample):
@@ -321,12 +317,7 @@ def defect_flags(mesh: Mesh, spread: np.ndarray, defects: np.ndarray) -> list[Qu
 def _near_boundary(mesh: Mesh) -> np.ndarray:
     """Triangles with a node within :data:`BOUNDARY_RINGS` rings of the boundary,
     shape (M,)."""
-    near = np.zeros(mesh.n_points, dtype=float)
-    near[mesh.boundary_nodes] = 1.0
-    step = mesh.topology.ring_step(mesh.n_points)
-    for _ in range(BOUNDARY_RINGS):
-        near = step @ near
-    return (near > 0)[mesh.triangles].any(axis=1)
+    return (~deep_nodes(mesh, BOUNDARY_RINGS))[mesh.triangles].any(axis=1)
 
 
 def _clusters(mesh: Mesh, flagged: np.ndarray) -> list[np.ndarray]:
