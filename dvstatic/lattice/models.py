@@ -35,7 +35,7 @@ from . import calibration
 from . import geometry as _geometry
 from .operator import RESIDUAL, LatticeOperator
 from .stabilise import clip_coupling, triangle_modes, triangle_tensors
-from .weights import BONDS, bond_weights, voronoi_weights
+from .weights import BONDS, bond_weights, default_bonds, voronoi_weights
 
 if TYPE_CHECKING:  # annotations only: scipy is imported where it is used
     import scipy.sparse as sp
@@ -69,8 +69,11 @@ class VoronoiModel:
         paper's closed form under affine strain (eqs. 9-10 / 19-20), no stabilisation.
         Or given :class:`~dvstatic.lattice.calibration.MicroParameters` (used as they
         are; a sequence of them with ``materials``: the default material's first).
-    bonds : {"surface", "fabric", "uniform", "voronoi"}
-        Normal-spring stiffness of each bond. ``"surface"`` (default): ``k_n``, and
+    bonds : {"auto", "surface", "fabric", "uniform", "voronoi"}
+        Normal-spring stiffness of each bond. ``"auto"`` (default): ``"fabric"`` on the
+        generators' graded meshes (a size field as ``h``), ``"surface"`` on all others
+        (:func:`~dvstatic.lattice.weights.default_bonds`; ``model.bonds`` holds the
+        scheme chosen). ``"surface"``: ``k_n``, and
         ``k_n / 2`` on boundary bonds (one triangle), which carry half a cell (as on the
         surface of a regular lattice) and would otherwise make a stiff surface layer;
         ``"fabric"``: the surface springs times ``1 - 4 n.D.n``, ``D`` the deviator of
@@ -121,7 +124,7 @@ class VoronoiModel:
     E: float
     nu: float
     calibration: object = "relaxed"
-    bonds: str = "surface"
+    bonds: str = "auto"
     plane: str = "stress"
     thickness: float | None = None
     materials: object = None
@@ -138,7 +141,9 @@ class VoronoiModel:
         material = Elastic(self.E, self.nu, self.plane)
         object.__setattr__(self, "E", material.E)
         object.__setattr__(self, "nu", material.nu)
-        check_choice("bonds", self.bonds, BONDS)
+        check_choice("bonds", self.bonds, ("auto",) + BONDS)
+        if self.bonds == "auto":
+            object.__setattr__(self, "bonds", default_bonds(self.mesh))
         if self.thickness is not None:
             object.__setattr__(self, "thickness", check_positive("thickness", self.thickness))
         object.__setattr__(self, "materials", self._checked_materials())

@@ -108,7 +108,7 @@ def periodic_sample(sampling: Sampling, n_points: int, seed: int | None = 0) -> 
             p = p + unit_disc(rng, len(p)) * sampling.jitter * h
     for amp in sampling.perturbations:
         p = p + unit_disc(rng, len(p)) * amp * h
-    return _periodic_mesh(p, period, Sampling(**{**sampling.__dict__, "h": h}))
+    return _periodic_mesh(p, period, Sampling(**{**sampling.__dict__, "h": h, "graded": False}))
 
 
 def periodic_lloyd(p: np.ndarray, period: np.ndarray, iterations: int) -> np.ndarray:

@@ -35,7 +35,13 @@ class Sampling:
         Amplitudes of later random moves (:meth:`Mesh.perturbed`), relative to the
         spacing, in the order they were applied.
     h : float
-        The generator's node spacing (length units): what the relative values refer to.
+        The generator's node spacing (length units): what the relative values refer to
+        (a graded mesh's smallest).
+    graded : bool
+        True if the spacing follows a size field (``h`` callable): the cells keep the
+        recipe's statistics but are stretched along the grading, which is why models on
+        such meshes take ``bonds="fabric"`` by default. Not part of :attr:`key` (the
+        calibration samples are uniform).
     """
 
     kind: str
@@ -43,6 +49,7 @@ class Sampling:
     iterations: int = 0
     perturbations: tuple[float, ...] = ()
     h: float = float("nan")
+    graded: bool = False
 
     def __post_init__(self) -> None:
         jitter = float(self.jitter) if self.kind == "jittered" else 0.0
@@ -51,6 +58,7 @@ class Sampling:
         object.__setattr__(self, "jitter", jitter)
         object.__setattr__(self, "iterations", int(self.iterations) if kind == "cvt" else 0)
         object.__setattr__(self, "perturbations", tuple(float(a) for a in self.perturbations))
+        object.__setattr__(self, "graded", bool(self.graded))
 
     def perturbed(self, amplitude: float) -> Sampling:
         """The recipe followed by a random move of ``amplitude`` (length units)."""
@@ -79,7 +87,7 @@ class Sampling:
         )
 
     def __str__(self) -> str:
-        s = self.kind
+        s = ("graded " if self.graded else "") + self.kind
         if self.kind == "jittered":
             s += f" (jitter {self.jitter:g})"
         if self.kind == "cvt":
