@@ -149,3 +149,20 @@ def test_graded_wall_displacement_by_default(seed):
     bonds, err = _tunnel_wall_error(seed)
     assert bonds == "fabric"
     assert abs(err) < 0.01
+
+
+def test_auto_keeps_surface_springs_where_the_fabric_cannot_be_corrected(caplog):
+    # a square grid split by parallel diagonals (fabric deviator 0.25), recorded as graded
+    from dvstatic.mesh.recipe import Sampling
+
+    i, j = np.meshgrid(np.arange(12.0), np.arange(12.0))
+    p = np.c_[i.ravel(), j.ravel()]
+    k = (i[:-1, :-1] + 12 * j[:-1, :-1]).ravel().astype(int)
+    tri = np.r_[np.c_[k, k + 1, k + 13], np.c_[k, k + 13, k + 12]]
+    mesh = dv.Mesh(p, tri, sampling=Sampling("cvt", iterations=30, h=1.0, graded=True))
+    with caplog.at_level("WARNING", logger="dvstatic.lattice.weights"):
+        model = dv.DV(mesh, 1e4, 0.25, calibration="paper")
+    assert model.bonds == "surface"
+    assert "too anisotropic" in caplog.text
+    with pytest.raises(dv.errors.InputError, match="too anisotropic"):
+        dv.DV(mesh, 1e4, 0.25, calibration="paper", bonds="fabric")

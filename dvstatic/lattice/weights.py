@@ -2,13 +2,18 @@
 
 from __future__ import annotations
 
+import logging
+
 import numpy as np
 
+from .._cache import PerObject
 from .._checks import check_choice
 from ..errors import InputError
 from ..mesh import Mesh
 from . import geometry as _geometry
 from .geometry import Geometry
+
+log = logging.getLogger(__name__)
 
 __all__ = [
     "BONDS",
@@ -23,8 +28,8 @@ __all__ = [
     "default_bonds",
 ]
 
-#: bond weighting schemes: half springs on the surface (the default), the same
-#: corrected for the local fabric, the paper's uniform springs, or springs weighted by
+#: bond weighting schemes: half springs on the surface (the default but on graded
+#: meshes: :func:`default_bonds`), the same corrected for the local fabric, the paper's uniform springs, or springs weighted by
 #: their own Voronoi side
 BONDS = ("surface", "fabric", "uniform", "voronoi")
 #: floor of the Voronoi bond weight (a bond whose dual side vanishes keeps a spring)
@@ -125,9 +130,23 @@ def default_bonds(mesh: Mesh) -> str:
     ``"fabric"`` on the generators' graded meshes (a size field: their cells are
     stretched along the grading, and over seeds the fabric correction keeps a tunnel
     wall's mean displacement within 0.6 % where the plain springs scatter by -5 to
-    +3 %: docs/validation.md), ``"surface"`` on every other mesh."""
-    graded = mesh.sampling is not None and mesh.sampling.graded
-    return "fabric" if graded else "surface"
+    +3 %: docs/validation.md), ``"surface"`` on every other mesh, and on a graded mesh
+    whose fabric is too anisotropic to correct (logged as a warning). Kept per mesh."""
+    return _AUTO(mesh)
+
+
+def _auto_scheme(mesh: Mesh) -> str:
+    if mesh.sampling is None or not mesh.sampling.graded:
+        return "surface"
+    try:
+        fabric_factors(mesh, surface_weights(mesh))
+    except InputError as exc:
+        log.warning("bonds='auto' keeps the surface springs on this graded mesh: %s", exc)
+        return "surface"
+    return "fabric"
+
+
+_AUTO = PerObject("default bonds", _auto_scheme)
 
 
 def bond_weights(scheme: str, mesh: Mesh) -> np.ndarray:
