@@ -29,8 +29,8 @@ __all__ = [
 ]
 
 #: bond weighting schemes: half springs on the surface (the default but on graded
-#: meshes: :func:`default_bonds`), the same corrected for the local fabric, the paper's uniform springs, or springs weighted by
-#: their own Voronoi side
+#: meshes: :func:`default_bonds`), the same corrected for the local fabric, the
+#: paper's uniform springs, or springs weighted by their own Voronoi side
 BONDS = ("surface", "fabric", "uniform", "voronoi")
 #: floor of the Voronoi bond weight (a bond whose dual side vanishes keeps a spring)
 MIN_WEIGHT = 0.05
