@@ -12,6 +12,14 @@ __all__ = ["print_summary"]
 SIGN_CONVENTION = "in %: (value - reference) / |reference|; + means above the reference"
 
 
+_SPRINGS = {
+    "surface": "surface springs",
+    "fabric": "fabric-corrected springs",
+    "uniform": "the paper's uniform springs",
+    "voronoi": "Voronoi-weighted springs",
+}
+
+
 def _model_line(md: dict) -> str:
     """One line on the model: material, plane, thickness, calibration and its cost."""
     txt = f"{md['type']} E = {md['E']:g}, nu = {md['nu']:g}, plane {md['plane']}"
@@ -26,7 +34,7 @@ def _model_line(md: dict) -> str:
                 f", {md.get('cvt_family_weight', 0.0):.2f} CVT-like"
             )
         txt += f", {md['calibration_seconds']:.2f} s"
-    txt += f"; bonds {md['bonds']})"
+    txt += f"; {_SPRINGS.get(md['bonds'], md['bonds'] + ' springs')})"
     classes = md.get("calibration_classes")
     if classes:  # k_n, nu_m above: the largest class's
         sp = classes["spread"]
@@ -77,7 +85,8 @@ def print_summary(sc, d: dict, written: list[Path]) -> None:
         *([("overrides", ", ".join(d["scene"]["overrides"]))] if d["scene"]["overrides"] else []),
         (
             "mesh",
-            f"{m['nodes']} nodes ({m['kind']}), {m['bonds']} bonds, sigma_L = {m['sigma_L']:.4f}",
+            f"{m['nodes']} nodes ({'graded ' if m.get('graded') else ''}{m['kind']}), "
+            f"{m['bonds']} bonds, sigma_L = {m['sigma_L']:.4f}",
         ),
         ("model", _model_line(md)),
         *[("calibration range", f["message"]) for f in md.get("calibration_flags", ())],

@@ -229,6 +229,7 @@ def _mesh_summary(mesh: Mesh) -> dict:
         "mean_bond_length": mesh.h,
         "sigma_L": mesh.edge_length_spread(),
         "kind": mesh.sampling.kind if mesh.sampling is not None else "imported",
+        "graded": bool(mesh.sampling is not None and mesh.sampling.graded),
         "parts": sorted(mesh.parts),
     }
 

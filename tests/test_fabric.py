@@ -166,3 +166,49 @@ def test_auto_keeps_surface_springs_where_the_fabric_cannot_be_corrected(caplog)
     assert "too anisotropic" in caplog.text
     with pytest.raises(dv.errors.InputError, match="too anisotropic"):
         dv.DV(mesh, 1e4, 0.25, calibration="paper", bonds="fabric")
+
+
+def test_graded_recipe_flag_stays_out_of_the_calibration_key():
+    from dvstatic.mesh import periodic_sample
+    from dvstatic.mesh.recipe import Sampling
+
+    graded = Sampling("cvt", iterations=30, h=0.1, graded=True)
+    assert graded.key == Sampling("cvt", iterations=30, h=0.1).key
+    assert str(graded).startswith("graded cvt")
+    assert not periodic_sample(graded, 400, 0).sampling.graded
+    # a constant size field grades nothing
+    flat = dv.mesh.rectangle(2.0, 1.0, lambda x: np.full(len(x), 0.1))
+    assert not flat.sampling.graded
+    assert dv.DV(flat, 1e4, 0.3).bonds == "surface"
+
+
+def test_auto_in_the_calibration_functions():
+    from dvstatic.lattice import calibration
+
+    graded = dv.mesh.rectangle(2.0, 1.0, lambda x: 0.05 + 0.1 * x[:, 0])
+    mp = calibration.relaxed("DV", graded, 1e4, 0.3, "auto")
+    assert mp.k_n == pytest.approx(dv.DV(graded, 1e4, 0.3).k_n, rel=1e-12)
+    with pytest.raises(dv.errors.InputError, match="auto"):
+        calibration.relaxed("DV", graded, 1e4, 0.3, "plain")
+
+
+@pytest.mark.parametrize("size", [2, 4])
+def test_distributed_paper_calibration_reads_the_whole_mesh_fabric(monkeypatch, size):
+    # the fabric reads six rings, a rank's patch holds two: the weights come from the
+    # whole (replicated) mesh, so the ranks' sums give the serial micro-parameters
+    graded = dv.mesh.rectangle(2.0, 1.0, lambda x: 0.03 + 0.06 * x[:, 0])
+    serial = dv.DV(graded, 1e4, 0.3, calibration="paper")
+    assert serial.bonds == "fabric"
+    monkeypatch.setenv("PMI_SIZE", str(size))  # as under mpiexec: calibrated on solve
+    lays = [distributed.layout(graded, r, size) for r in range(size)]
+    sums = []
+    for lay in lays:
+        fresh = dv.DV(graded, 1e4, 0.3, calibration="paper")
+        calls = iter([lambda a: a, lambda a: sums.append(a.copy()) or a])
+        distributed.micro_parameters(fresh, lay, lambda a, calls=calls: next(calls)(a))
+    total = np.sum(sums, axis=0)
+    fresh = dv.DV(graded, 1e4, 0.3, calibration="paper")
+    calls = iter([lambda a: a, lambda a: total])
+    (mp,) = distributed.micro_parameters(fresh, lays[0], lambda a: next(calls)(a))
+    assert mp.k_n == pytest.approx(serial.k_n, rel=1e-12)
+    assert mp.nu_m == pytest.approx(serial.nu_m, rel=1e-12, abs=1e-12)

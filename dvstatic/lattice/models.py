@@ -73,7 +73,8 @@ class VoronoiModel:
         Normal-spring stiffness of each bond. ``"auto"`` (default): ``"fabric"`` on the
         generators' graded meshes (a size field as ``h``), ``"surface"`` on all others
         (:func:`~dvstatic.lattice.weights.default_bonds`; ``model.bonds`` holds the
-        scheme chosen). ``"surface"``: ``k_n``, and
+        scheme chosen, which ``dataclasses.replace`` keeps: pass ``bonds="auto"``
+        again with another mesh). ``"surface"``: ``k_n``, and
         ``k_n / 2`` on boundary bonds (one triangle), which carry half a cell (as on the
         surface of a regular lattice) and would otherwise make a stiff surface layer;
         ``"fabric"``: the surface springs times ``1 - 4 n.D.n``, ``D`` the deviator of

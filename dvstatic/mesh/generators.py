@@ -209,7 +209,8 @@ def _graded(domain: Domain, h: SizeField, kind: str, seed) -> Mesh:
     bnd, seg_a, seg_b = _loop_points(domain.loops, h)
     inner = density_points(domain, h, rng, lambda p: _distance_to_boundary(domain, p))
     inner = _gabriel(inner, seg_a, seg_b)
-    sampling = Sampling(kind, 0.0, CVT_ITERATIONS, h=h.min, graded=True)
+    graded = h.max > h.min * (1.0 + 1e-9)  # a constant field grades nothing
+    sampling = Sampling(kind, 0.0, CVT_ITERATIONS, h=h.min, graded=graded)
     return _triangulated(domain, np.vstack([bnd, inner]), h, sampling)
 
 

@@ -208,7 +208,7 @@ def micro_parameters(model, lay: Layout, allreduce) -> tuple:
             calibration.relaxed(model.kind, model.mesh, E2, nu2, model.bonds)
             for E2, nu2 in constants
         )
-    w = bond_weights(model.bonds, lay.patch)
+    w = patch_bond_weights(model, lay)
     sums = calibration.moment_sums(model.kind, geom, w, own_b, owned_triangles(lay))
     mom = calibration.moments_from_sums(allreduce(sums), model.mesh.area)
     return tuple(calibration.paper_from_moments(model.kind, mom, E2, nu2) for E2, nu2 in constants)
