@@ -35,7 +35,7 @@ from . import calibration
 from . import geometry as _geometry
 from .operator import RESIDUAL, LatticeOperator
 from .stabilise import clip_coupling, triangle_modes, triangle_tensors
-from .weights import BONDS, bond_weights, default_bonds, voronoi_weights
+from .weights import BONDS, bond_weights, resolve_bonds, voronoi_weights
 
 if TYPE_CHECKING:  # annotations only: scipy is imported where it is used
     import scipy.sparse as sp
@@ -142,9 +142,7 @@ class VoronoiModel:
         material = Elastic(self.E, self.nu, self.plane)
         object.__setattr__(self, "E", material.E)
         object.__setattr__(self, "nu", material.nu)
-        check_choice("bonds", self.bonds, ("auto",) + BONDS)
-        if self.bonds == "auto":
-            object.__setattr__(self, "bonds", default_bonds(self.mesh))
+        object.__setattr__(self, "bonds", resolve_bonds(self.bonds, self.mesh))
         if self.thickness is not None:
             object.__setattr__(self, "thickness", check_positive("thickness", self.thickness))
         object.__setattr__(self, "materials", self._checked_materials())

@@ -26,6 +26,7 @@ __all__ = [
     "node_fabric",
     "bond_weights",
     "default_bonds",
+    "resolve_bonds",
 ]
 
 #: bond weighting schemes: half springs on the surface (the default but on graded
@@ -135,18 +136,33 @@ def default_bonds(mesh: Mesh) -> str:
     return _AUTO(mesh)
 
 
+def resolve_bonds(bonds: str, mesh: Mesh) -> str:
+    """``bonds`` checked (one of :data:`BONDS` or ``"auto"``), ``"auto"`` resolved for
+    ``mesh`` (:func:`default_bonds`)."""
+    check_choice("bonds", bonds, ("auto",) + BONDS)
+    return default_bonds(mesh) if bonds == "auto" else bonds
+
+
 def _auto_scheme(mesh: Mesh) -> str:
     if mesh.sampling is None or not mesh.sampling.graded:
         return "surface"
     try:
-        fabric_factors(mesh, surface_weights(mesh))
+        _FABRIC(mesh)
     except InputError as exc:
         log.warning("bonds='auto' keeps the surface springs on this graded mesh: %s", exc)
         return "surface"
     return "fabric"
 
 
+def _fabric_weights(mesh: Mesh) -> np.ndarray:
+    w = surface_weights(mesh)
+    w = w * fabric_factors(mesh, w)
+    w.setflags(write=False)
+    return w
+
+
 _AUTO = PerObject("default bonds", _auto_scheme)
+_FABRIC = PerObject("fabric weights", _fabric_weights)
 
 
 def bond_weights(scheme: str, mesh: Mesh) -> np.ndarray:
@@ -158,8 +174,7 @@ def bond_weights(scheme: str, mesh: Mesh) -> np.ndarray:
     elif scheme == "surface":
         w = surface_weights(mesh)
     elif scheme == "fabric":
-        w = surface_weights(mesh)
-        w = w * fabric_factors(mesh, w)
+        return _FABRIC(mesh)  # kept per mesh: read again by bonds="auto" and the ranks
     else:
         w = voronoi_weights(_geometry.of(mesh))
     w.setflags(write=False)

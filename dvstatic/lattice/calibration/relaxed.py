@@ -35,7 +35,6 @@ from collections.abc import Callable
 import numpy as np
 
 from ..._cache import Bounded
-from ..._checks import check_choice
 from ...errors import CalibrationError
 from ...linalg import ConstrainedSystem, DirectSolver
 from ...material import to_mandel
@@ -44,7 +43,7 @@ from ...mesh.recipe import Sampling
 from .. import geometry as _geometry
 from ..operator import LatticeOperator, scatter_bond_forces, virial_sum
 from ..stabilise import clip_coupling, triangle_modes
-from ..weights import BONDS, bond_weights, default_bonds
+from ..weights import bond_weights, resolve_bonds
 from . import table
 from .base import MicroParameters
 from .descriptors import (  # noqa: F401 (re-exported: the relaxed calibration's descriptors)
@@ -240,12 +239,6 @@ def isotropic_part(C: np.ndarray) -> dict:
     return {"C": C, "E": 4 * k2 * g / (k2 + g), "nu": (k2 - g) / (k2 + g)}
 
 
-def _scheme(bonds: str, mesh: Mesh) -> str:
-    """A concrete spring scheme: ``bonds`` checked, ``"auto"`` resolved for ``mesh``."""
-    check_choice("bonds", bonds, ("auto",) + BONDS)
-    return default_bonds(mesh) if bonds == "auto" else bonds
-
-
 def relaxed(
     kind: str,
     mesh: Mesh,
@@ -266,8 +259,8 @@ def relaxed(
     E, nu : float
         In-plane constants to match (plane strain: the effective ones).
     bonds : {"auto", "surface", "fabric", "uniform", "voronoi"}
-        (``"auto"``: the scheme a model takes on ``mesh`` by default.)
-        The model's bond scheme.
+        The model's bond scheme (``"auto"``: the one a model takes on ``mesh`` by
+        default).
     rev_points, seed : int
         Size and seed of a sample made on the fly.
     spread : float, optional
@@ -294,7 +287,7 @@ def relaxed(
         if value is not None and not (np.isfinite(float(value)) and 0.0 <= float(value) <= hi):
             raise CalibrationError(f"{name} must be finite in [0, {hi:g}], got {value!r}", name)
     t0 = time.perf_counter()
-    bonds = _scheme(bonds, mesh)
+    bonds = resolve_bonds(bonds, mesh)
     curve, ckey = moduli_curve(kind, mesh, bonds, rev_points, seed, spread, defects)
     key = (ckey, round(float(nu), 12))
     hit = _RESULTS.get(key)
@@ -349,7 +342,7 @@ def moduli_curve(
     key : tuple
         Identifies the curve.
     """
-    bonds = _scheme(bonds, mesh)
+    bonds = resolve_bonds(bonds, mesh)
     if _SAMPLE_BONDS[bonds] in table.WEIGHTINGS and mesh.sampling is not None:
         c = table.curve(kind, mesh.sampling, _SAMPLE_BONDS[bonds])
         if c is not None:
