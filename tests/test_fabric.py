@@ -133,7 +133,10 @@ def test_default_scheme_follows_the_mesh():
     uniform = dv.mesh.rectangle(2.0, 1.0, 0.1, kind="cvt")
     graded = dv.mesh.rectangle(2.0, 1.0, lambda x: 0.05 + 0.1 * x[:, 0])
     assert graded.sampling.graded and not uniform.sampling.graded
-    assert dv.DV(uniform, 1e4, 0.3).bonds == "surface"
+    assert dv.DV(uniform, 1e4, 0.3).bonds == "fabric"  # a point set's patches
+    for kind in ("lattice", "jittered"):  # an isotropic fabric: nothing to correct
+        assert dv.DV(dv.mesh.rectangle(2.0, 1.0, 0.1, kind=kind), 1e4, 0.3).bonds == "surface"
+    assert dv.DV(dv.Mesh(uniform.points, uniform.triangles), 1e4, 0.3).bonds == "surface"
     assert dv.RV(graded, 1e4, 0.3).bonds == "fabric"
     assert dv.DV(graded, 1e4, 0.3, bonds="surface").bonds == "surface"
     assert dv.DV(graded.perturbed(0.001), 1e4, 0.3).bonds == "fabric"
@@ -168,6 +171,19 @@ def test_auto_keeps_surface_springs_where_the_fabric_cannot_be_corrected(caplog)
         dv.DV(mesh, 1e4, 0.25, calibration="paper", bonds="fabric")
 
 
+def test_a_few_bonds_past_the_floor_are_clipped_not_refused(caplog):
+    # this random mesh has 3 of 12,5xx bonds below the floor, at its corner (4, 0)
+    from dvstatic.lattice.weights import FABRIC_MIN
+
+    mesh = dv.mesh.rectangle(4.0, 1.0, 0.034, kind="random", seed=2)
+    w = surface_weights(mesh)
+    with caplog.at_level("INFO", logger="dvstatic.lattice.weights"):
+        f = fabric_factors(mesh, w)
+    assert "3 of" in caplog.text and "clipped" in caplog.text
+    assert f.min() == FABRIC_MIN and (f == FABRIC_MIN).sum() == 3
+    assert dv.DV(mesh, 1e4, 0.3).bonds == "fabric"
+
+
 def test_graded_recipe_flag_stays_out_of_the_calibration_key():
     from dvstatic.mesh import periodic_sample
     from dvstatic.mesh.recipe import Sampling
@@ -179,7 +195,6 @@ def test_graded_recipe_flag_stays_out_of_the_calibration_key():
     # a constant size field grades nothing
     flat = dv.mesh.rectangle(2.0, 1.0, lambda x: np.full(len(x), 0.1))
     assert not flat.sampling.graded
-    assert dv.DV(flat, 1e4, 0.3).bonds == "surface"
 
 
 def test_auto_in_the_calibration_functions():

@@ -71,7 +71,8 @@ class VoronoiModel:
         are; a sequence of them with ``materials``: the default material's first).
     bonds : {"auto", "surface", "fabric", "uniform", "voronoi"}
         Normal-spring stiffness of each bond. ``"auto"`` (default): ``"fabric"`` on the
-        generators' graded meshes (a size field as ``h``), ``"surface"`` on all others
+        generators' graded meshes (a size field as ``h``) and CVT and random point
+        sets, ``"surface"`` on all others
         (:func:`~dvstatic.lattice.weights.default_bonds`; ``model.bonds`` holds the
         scheme chosen, which ``dataclasses.replace`` keeps: pass ``bonds="auto"``
         again with another mesh). ``"surface"``: ``k_n``, and
