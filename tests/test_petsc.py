@@ -104,8 +104,9 @@ def test_patch_rows_equal_global_rows(cls, bonds, monkeypatch):  # the paper's c
 
 @pytest.mark.parametrize("cls", [dv.DV, dv.RV])
 def test_patch_rows_equal_global_rows_with_the_defaults(cls):
-    """Surface bonds and the per-triangle clipping of the default model are local: the
-    owned rows of every patch equal the global rows (random mesh: many clipped)."""
+    """The default model's springs (on random points: fabric-corrected, read from the
+    whole mesh as the engine does) and its per-triangle clipping: the owned rows of every
+    patch equal the global rows (random mesh: many clipped)."""
     mesh = dv.mesh.rectangle(1.0, 1.0, 0.1, kind="random", seed=4)
     nu = 0.2 if cls is dv.DV else 0.45  # where each clips triangles on a random mesh
     model = cls(mesh, 1e5, nu)
@@ -113,7 +114,8 @@ def test_patch_rows_equal_global_rows_with_the_defaults(cls):
     K = model.stiffness()
     for rank in range(3):
         lay = distributed.layout(mesh, rank, 3)
-        pm = cls(lay.patch, 1e5, nu, calibration=model.micro)
+        pm = cls(lay.patch, 1e5, nu, calibration=model.micro, bonds=model.bonds)
+        object.__setattr__(pm, "bond_weight", distributed.patch_bond_weights(model, lay))
         gd = np.stack([2 * lay.local_nodes, 2 * lay.local_nodes + 1], axis=1).reshape(-1)
         n2 = 2 * lay.n_owned
         assert abs(pm.stiffness()[:n2] - K[gd[:n2]][:, gd]).max() < 1e-9 * abs(K).max()
