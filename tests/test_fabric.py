@@ -6,7 +6,12 @@ import pytest
 import dvstatic as dv
 from dvstatic import parallel as distributed
 from dvstatic.lattice import geometry
-from dvstatic.lattice.weights import FABRIC_RINGS, fabric_factors, surface_weights
+from dvstatic.lattice.weights import (
+    FABRIC_RINGS,
+    default_bonds,
+    fabric_factors,
+    surface_weights,
+)
 
 
 def _fabric_deviator(mesh, w) -> np.ndarray:
@@ -135,11 +140,11 @@ def test_default_scheme_follows_the_mesh():
     assert graded.sampling.graded and not uniform.sampling.graded
     assert dv.DV(uniform, 1e4, 0.3).bonds == "fabric"  # a point set's patches
     for kind in ("lattice", "jittered"):  # an isotropic fabric: nothing to correct
-        assert dv.DV(dv.mesh.rectangle(2.0, 1.0, 0.1, kind=kind), 1e4, 0.3).bonds == "surface"
-    assert dv.DV(dv.Mesh(uniform.points, uniform.triangles), 1e4, 0.3).bonds == "surface"
+        assert default_bonds(dv.mesh.rectangle(2.0, 1.0, 0.1, kind=kind)) == "surface"
+    assert default_bonds(dv.Mesh(uniform.points, uniform.triangles)) == "surface"  # imported
     assert dv.RV(graded, 1e4, 0.3).bonds == "fabric"
     assert dv.DV(graded, 1e4, 0.3, bonds="surface").bonds == "surface"
-    assert dv.DV(graded.perturbed(0.001), 1e4, 0.3).bonds == "fabric"
+    assert default_bonds(graded.perturbed(0.001)) == "fabric"
     with pytest.raises(dv.errors.InputError, match="auto"):
         dv.DV(uniform, 1e4, 0.3, bonds="plain")
 
