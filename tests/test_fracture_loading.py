@@ -419,6 +419,19 @@ def test_updates_give_the_same_events_as_refactorising_under_held_loads():
     assert fast.stats.factorisations < slow.stats.factorisations / 10
 
 
+def _assert_contact_consistent(model, res, faces):
+    """In every snapshot of ``res`` no closed face pulls and no open cracked face of
+    ``faces`` (bool, n_bonds) overlaps."""
+    n, bonds = model.geometry.direction, model.mesh.topology.bonds
+    for snap in res.snapshots:
+        el = np.einsum("ei,ei->e", n, snap.u[bonds[:, 1]] - snap.u[bonds[:, 0]])
+        closed = np.zeros(len(el), dtype=bool)
+        closed[list(res.events[snap.event].closed)] = True
+        tol = 1e-6 * np.abs(el).max()
+        assert not np.any(closed & (el > tol))
+        assert not np.any(faces & ~closed & (snap.stiffness < 1) & (el < -tol))
+
+
 @pytest.mark.parametrize("seed", [3, 5, 8])
 def test_with_held_loads_every_recorded_contact_status_is_consistent(seed):
     """A cracked plate loaded again under held pressures and growing tractions: in every
@@ -449,16 +462,8 @@ def test_with_held_loads_every_recorded_contact_status_is_consistent(seed):
         stop_load_ratio=0.0,
         snapshot_every=1,
     )
-    n, bonds = model.geometry.direction, mesh.topology.bonds
-    faces = cracked.bond_state["cracked"]
     assert any(len(e.closed) for e in res.events)
-    for snap in res.snapshots:
-        el = np.einsum("ei,ei->e", n, snap.u[bonds[:, 1]] - snap.u[bonds[:, 0]])
-        closed = np.zeros(len(el), dtype=bool)
-        closed[list(res.events[snap.event].closed)] = True
-        tol = 1e-6 * np.abs(el).max()
-        assert not np.any(closed & (el > tol))
-        assert not np.any(faces & ~closed & (snap.stiffness < 1) & (el < -tol))
+    _assert_contact_consistent(model, res, cracked.bond_state["cracked"])
 
 
 def test_going_on_needs_the_same_teeth_and_held_errors_name_held():
@@ -547,12 +552,4 @@ def test_contact_passes_that_stall_on_a_kink_settle_by_trial(caplog):
         )
     assert len(res.events) > 304
     assert "did not settle" not in caplog.text and "kept flipping" not in caplog.text
-    n, bonds = model.geometry.direction, model.mesh.topology.bonds
-    faces = res.bond_state["cracked"]
-    for snap in res.snapshots:
-        el = np.einsum("ei,ei->e", n, snap.u[bonds[:, 1]] - snap.u[bonds[:, 0]])
-        closed = np.zeros(len(el), dtype=bool)
-        closed[list(res.events[snap.event].closed)] = True
-        tol = 1e-6 * np.abs(el).max()
-        assert not np.any(closed & (el > tol))
-        assert not np.any(faces & ~closed & (snap.stiffness < 1) & (el < -tol))
+    _assert_contact_consistent(model, res, res.bond_state["cracked"])
