@@ -136,7 +136,7 @@ class EventSearch:
         contact, soft = self.contact, self.criterion.softening
         z, newton, moved = self._at(lam), True, False
         energy = None  # of z; only needed once the status changes (most events: never)
-        seen: list[np.ndarray] = []  # the statuses taken, to catch a cycle
+        seen = [contact.closed.copy()]  # the statuses taken, to catch a cycle
         disputed, tried = None, False
         for _ in range(MAX_ITERATIONS):
             status = contact.status(soft(z))
@@ -148,6 +148,7 @@ class EventSearch:
                 tried = True
                 if self._settle_among(faces, lam):
                     return True
+                moved = True
                 z, energy, newton = self._at(lam), None, True
                 continue
             if len(changed):
@@ -175,7 +176,10 @@ class EventSearch:
         return moved
 
     def _take(self, status: np.ndarray, changed: np.ndarray) -> None:
-        """Take the contact ``status`` (``changed``: the faces that turned) and solve."""
+        """Take the contact ``status`` (``changed``: the faces that turned) and solve
+        (nothing to do if none turned: the current solve is that status's)."""
+        if not len(changed):
+            return
         self.contact.set(status)
         self.solver.touch(np.unique(self.bond_tris[changed]))
         if self.opts.max_rank == 0:
@@ -183,10 +187,12 @@ class EventSearch:
         self._solve()
 
     def _settle_among(self, faces: np.ndarray, lam: float) -> bool:
-        """The Newton passes came back to a status: try every status of the few
-        ``faces`` that changed since (the others kept) and take a consistent one of least
-        energy (the convex problem's solution; True); if none is consistent, keep the
-        status of least energy and return False (the damped passes go on from there)."""
+        """The Newton passes came back to a status or stalled on a kink: try every
+        status of the few ``faces`` in dispute (those that changed since the status was
+        taken, or those the last solve would turn; the others kept) and take a
+        consistent one of least energy (the convex problem's solution; True); if none is
+        consistent, keep the status of least energy and return False (the damped passes
+        go on from there)."""
         soft, base = self.criterion.softening, self.contact.closed.copy()
         best = None
         for bits in range(2 ** len(faces)):

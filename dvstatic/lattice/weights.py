@@ -19,7 +19,10 @@ __all__ = [
     "BONDS",
     "MIN_WEIGHT",
     "FABRIC_MIN",
+    "FABRIC_CLIP_SHARE",
+    "FABRIC_CLIP_FEW",
     "FABRIC_RINGS",
+    "FABRIC_KINDS",
     "voronoi_weights",
     "surface_weights",
     "fabric_factors",
@@ -29,9 +32,10 @@ __all__ = [
     "resolve_bonds",
 ]
 
-#: bond weighting schemes: half springs on the surface (the default but on graded
-#: meshes: :func:`default_bonds`), the same corrected for the local fabric, the
-#: paper's uniform springs, or springs weighted by their own Voronoi side
+#: bond weighting schemes: half springs on the surface (the default on lattices,
+#: jittered and imported meshes: :func:`default_bonds`), the same corrected for the
+#: local fabric, the paper's uniform springs, or springs weighted by their own Voronoi
+#: side
 BONDS = ("surface", "fabric", "uniform", "voronoi")
 #: floor of the Voronoi bond weight (a bond whose dual side vanishes keeps a spring)
 MIN_WEIGHT = 0.05
@@ -40,9 +44,10 @@ FABRIC_RINGS = 6
 #: the fabric correction refuses a mesh whose springs it would scale below this (a
 #: fabric deviator of about 0.22; CVT and random points reach 0.07 and 0.16)
 FABRIC_MIN = 0.1
-#: up to this share of the bonds (a few bonds at a random mesh's corner) the factors
-#: are clipped at FABRIC_MIN instead of refused
+#: up to this share of the bonds, or FABRIC_CLIP_FEW of them (a few bonds at a random
+#: mesh's corner), the factors are clipped at FABRIC_MIN instead of refused
 FABRIC_CLIP_SHARE = 1e-3
+FABRIC_CLIP_FEW = 3
 
 
 def voronoi_weights(geom: Geometry) -> np.ndarray:
@@ -81,9 +86,10 @@ def fabric_factors(mesh: Mesh, weights: np.ndarray, rings: int = FABRIC_RINGS) -
     Raises
     ------
     InputError
-        Where more than :data:`FABRIC_CLIP_SHARE` of the factors would fall below
-        :data:`FABRIC_MIN` (a fabric too anisotropic to correct: the message says
-        where); fewer are clipped at :data:`FABRIC_MIN` (logged).
+        Where more than :data:`FABRIC_CLIP_SHARE` of the factors (and more than
+        :data:`FABRIC_CLIP_FEW`) would fall below :data:`FABRIC_MIN` (a fabric too
+        anisotropic to correct: the message says where); fewer are clipped at
+        :data:`FABRIC_MIN` (logged).
     """
     b = mesh.topology.bonds
     d = _geometry.of(mesh).direction
@@ -98,24 +104,25 @@ def fabric_factors(mesh: Mesh, weights: np.ndarray, rings: int = FABRIC_RINGS) -
     worst = int(np.argmin(factors))
     x, y = mesh.points[b[worst]].mean(axis=0)
     where = f"near ({x:.4g}, {y:.4g}) (deviator {np.hypot(half[worst], a[worst, 1]):.3f})"
-    if low.sum() <= FABRIC_CLIP_SHARE * len(factors):
+    if low.sum() <= max(FABRIC_CLIP_FEW, FABRIC_CLIP_SHARE * len(factors)):
         log.info(
-            "bonds='fabric': %d of %d bonds clipped at %g of their springs, the most %s",
+            "bonds='fabric': %d of %d bonds clipped at %g of their springs (the worst "
+            "would fall to %.3g, %s)",
             low.sum(),
             len(factors),
             FABRIC_MIN,
+            factors[worst],
             where,
         )
         return np.maximum(factors, FABRIC_MIN)
     raise InputError(
         f"bonds='fabric' cannot correct this mesh's fabric: it is too anisotropic at "
-        f"{low.sum()} of {len(factors)} bonds, the most {where}; the correction needs "
-        f"a deviator below about {(1 - FABRIC_MIN) / 4:.3f}; its springs there would "
+        f"{low.sum()} of {len(factors)} bonds, the worst {where}; the correction needs "
+        f"a deviator below about {(1 - FABRIC_MIN) / 4:.3f}; the springs there would "
         f"fall to {factors[worst]:.3g} of theirs (a square grid split by parallel "
         "diagonals: 0.25); use bonds='surface' (and expect anisotropic moduli) or remesh",
         "bonds",
     )
-    return factors
 
 
 def node_fabric(mesh: Mesh, weights: np.ndarray, rings: int = FABRIC_RINGS) -> np.ndarray:
