@@ -160,8 +160,7 @@ def default_bonds(mesh: Mesh) -> str:
     on CVT; mixed on the cantilever and on LE1 with random points; docs/validation.md);
     ``"surface"`` on lattices, jittered lattices (an isotropic fabric), imported meshes
     (on a strongly graded gmsh plate the fabric triples the L2 error), and wherever the
-    fabric is too anisotropic to correct (logged as a
-    warning). Kept per mesh."""
+    fabric is too anisotropic to correct (logged as a warning). Kept per mesh."""
     return _AUTO(mesh)
 
 
