@@ -204,3 +204,20 @@ def test_patch_test_quick(out):
         assert rows[(mesh, "fabric")]["lame"] < 0.7 * rows[(mesh, "surface")]["lame"]
     for mesh in ("jittered", "cvt"):
         assert rows[(mesh, "voronoi")]["hydrostatic"] < 0.003
+
+
+@pytest.mark.slow
+def test_boundary_layer_quick(out):
+    _run("boundary_layer", out, "--stress")
+    data = json.loads((out / "boundary_layer.json").read_text())
+    rows = data["rows"]
+    for r in rows:
+        assert r["dv_is_p1_with_C_T"] < 1e-10  # each DV triangle is P1 with its own C_T
+    k = next(r for r in rows if r["problem"] == "kirsch" and r["kind"] == "lattice")
+    # the lattice's error near the hole is its boundary triangles': replaced by P1,
+    # the rest of the regular lattice is as accurate as P1 on the same triangles
+    assert k["lattice"]["near"] > 5 * k["P1"]["near"]
+    assert k["all boundary triangles"]["near"] < 1.5 * k["P1"]["near"]
+    # the probe: the package's recovery on such boundary cells, Kirsch's corner
+    s = next(r for r in data["stress"] if r["kind"] == "jittered")
+    assert abs(s["exact boundary cells"]["hoop_at_top"]) < 0.5 * abs(s["lattice"]["hoop_at_top"])
