@@ -33,6 +33,7 @@ from _benchmarks import cantilever, kirsch, lame
 from _common import parser, write_json
 
 import dvstatic as dv
+from dvstatic.lattice import geometry as _geometry
 from dvstatic.lattice import operator as _operator
 from dvstatic.lattice.damage import split
 from dvstatic.problem.problem import Problem
@@ -52,18 +53,18 @@ def _p1_matrices(x: np.ndarray, C: np.ndarray) -> np.ndarray:
     return np.einsum("mki,mkl,mlj->mij", B, C, B) * np.abs(area)[:, None, None]
 
 
-def triangle_tensors(s, x: np.ndarray) -> np.ndarray:
-    """Every triangle's own tensor ``C_T`` (m, 3, 3), Mandel, from the split ``s``."""
-    area = 0.5 * np.abs(
-        (x[:, 1, 0] - x[:, 0, 0]) * (x[:, 2, 1] - x[:, 0, 1])
-        - (x[:, 2, 0] - x[:, 0, 0]) * (x[:, 1, 1] - x[:, 0, 1])
-    )
-    unit = [
-        np.array([[1, 0], [0, 0]]),
-        np.array([[0, 0], [0, 1]]),
-        np.array([[0, 1], [1, 0]]) / np.sqrt(2),
-    ]
-    e = np.stack([np.einsum("mkj,mj->mk", s.b, (x @ eps.T).reshape(len(x), 6)) for eps in unit], -1)
+def elongations(s, mesh) -> tuple[np.ndarray, np.ndarray]:
+    """The elongations of every triangle's bonds per unit strain ``E_T`` (m, 3 bonds,
+    3 Mandel strains) from the split ``s``, and the triangles' areas (m,)."""
+    x = mesh.points[mesh.triangles]
+    unit = (np.diag([1.0, 0.0]), np.diag([0.0, 1.0]), np.array([[0, 1], [1, 0]]) / np.sqrt(2))
+    e = np.stack([np.einsum("mkj,mj->mk", s.b, (x @ u.T).reshape(len(x), 6)) for u in unit], -1)
+    return e, _geometry.of(mesh).tri_area
+
+
+def triangle_tensors(s, mesh) -> np.ndarray:
+    """Every triangle's own tensor ``C_T = E_T^T Q_T E_T / A`` (m, 3, 3), Mandel."""
+    e, area = elongations(s, mesh)
     return np.einsum("mki,mkl,mlj->mij", e, s.q(s.w, s.g), e) / area[:, None, None]
 
 
@@ -101,7 +102,7 @@ def row(name: str, bm, kind: str, nodes: int, hole: str | None) -> dict:
     K0 = s.stiffness(mesh, s.w, s.g).tocsr()
     # the identity the diagnosis rests on: each DV triangle is P1 with its own C_T
     ke_dv = np.einsum("mki,mkl,mlj->mij", s.b, s.q(s.w, s.g), s.b)
-    ke_p1 = _p1_matrices(p[tri], triangle_tensors(s, p[tri]))
+    ke_p1 = _p1_matrices(p[tri], triangle_tensors(s, mesh))
     identity = float(np.abs(ke_dv - ke_p1).max() / np.abs(ke_dv).max())
     ue = bm.exact(p)
     r = np.hypot(*p.T)
@@ -172,17 +173,7 @@ def stress_row(name: str, bm, kind: str, nodes: int, hole: str) -> dict:
     mesh = bm.make_mesh(bm.h_for(nodes), kind=kind, seed=1)
     s = split(dv.DV(mesh, bm.E, bm.nu, plane=bm.plane))
     tri, p = mesh.triangles, mesh.points
-    x = p[tri]
-    area = 0.5 * np.abs(
-        (x[:, 1, 0] - x[:, 0, 0]) * (x[:, 2, 1] - x[:, 0, 1])
-        - (x[:, 2, 0] - x[:, 0, 0]) * (x[:, 1, 1] - x[:, 0, 1])
-    )
-    unit = [
-        np.diag([1.0, 0.0]),
-        np.diag([0.0, 1.0]),
-        np.array([[0, 1], [1, 0]]) / 2**0.5,
-    ]
-    e = np.stack([np.einsum("mkj,mj->mk", s.b, (x @ u.T).reshape(len(x), 6)) for u in unit], -1)
+    e, area = elongations(s, mesh)
     on_b = np.zeros(mesh.n_points, dtype=bool)
     on_b[np.unique(mesh.topology.boundary_edges)] = True
     sel = on_b[tri].any(axis=1)
