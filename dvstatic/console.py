@@ -34,7 +34,10 @@ def _model_line(md: dict) -> str:
                 f", {md.get('cvt_family_weight', 0.0):.2f} CVT-like"
             )
         txt += f", {md['calibration_seconds']:.2f} s"
-    txt += f"; {_SPRINGS.get(md['bonds'], md['bonds'] + ' springs')})"
+    txt += f"; {_SPRINGS.get(md['bonds'], md['bonds'] + ' springs')}"
+    if md.get("exact_cells"):
+        txt += f"; {md['exact_cells']} exact boundary cells"
+    txt += ")"
     classes = md.get("calibration_classes")
     if classes:  # k_n, nu_m above: the largest class's
         sp = classes["spread"]

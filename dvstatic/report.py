@@ -248,6 +248,8 @@ def _model_summary(model) -> dict:
             float((m.details or {}).get("seconds", 0.0)) for m in model.micros
         ),
         "bonds": model.bonds,
+        "boundary_cells": model.boundary_cells,
+        "exact_cells": int(len(model.cell_triangles)),
         "k_n": model.k_n,
         "nu_m": model.nu_m,
         "stabilised": model.micro.stabilised,

@@ -11,7 +11,7 @@ from dvstatic.lattice.calibration import table
 from dvstatic.lattice.stabilise import MARGIN, triangle_modes
 
 E = 1e5
-PAPER = {"calibration": "paper", "bonds": "uniform"}
+PAPER = {"calibration": "paper", "bonds": "uniform", "boundary_cells": "lattice"}
 
 
 def _uniaxial_error(mesh, cls, nu, **kw):

@@ -74,7 +74,9 @@ def test_plate_with_hole(tmp_path):
 
 
 def test_brazilian_disc(tmp_path):
-    d, _ = run_scene("brazilian_disc", tmp_path, "mesh.h=0.08", "output.fe_refine=0")
+    # the example's own h = 0.04 (2,523 nodes): at h = 0.08 (12 spacings to the
+    # radius) the recovery's window blurs the centre's peak by 6 % (1.4 % at 0.04)
+    d, _ = run_scene("brazilian_disc", tmp_path, "output.fe_refine=0")
     s = np.array(d["probes"]["stress"][0])
     closed = 2 * 1.0 / (np.pi * 2.0)  # 2 P / (pi D)
     assert s[0, 0] == pytest.approx(closed, rel=0.05)

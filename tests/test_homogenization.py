@@ -7,7 +7,7 @@ import dvstatic as dv
 
 E = 1e7
 #: the paper's model: calibrated under affine strain, as exp. 1 measures
-PAPER = {"calibration": "paper", "bonds": "uniform"}
+PAPER = {"calibration": "paper", "bonds": "uniform", "boundary_cells": "lattice"}
 NUS = [-0.5, -0.2, 0.0, 0.2, 0.33, 0.45]
 
 

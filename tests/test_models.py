@@ -5,7 +5,8 @@ import scipy.sparse as sp
 import dvstatic as dv
 from dvstatic.linalg import rigid_modes
 
-PAPER = {"calibration": "paper", "bonds": "uniform"}  # the paper's model
+# the paper's model
+PAPER = {"calibration": "paper", "bonds": "uniform", "boundary_cells": "lattice"}
 
 MODELS = [dv.DV, dv.RV]
 

@@ -362,13 +362,17 @@ def _lame_lattice_errors(cls, h, nu):
 @pytest.mark.parametrize("cls", [dv.DV, dv.RV])
 def test_lame_cylinder_in_plane_strain_with_the_lattice(cls):
     """The lattice (defaults) on the same cylinder: nu = 0.2 within 2.5 % (1,243 nodes;
-    measured 1.8 %), the mean hoop stress at the bore within 2.5 % (measured +1.0 % DV,
-    -2.0 % RV at a / h = 8; +0.2 % and -0.2 % at a / h = 32); nu = 0.45 (in-plane
-    nu* = 0.82, where many triangles' coupling is clipped) is much harder: 10 % (DV)
-    and 16 % (RV) at 1,243 nodes, and the error falls by at least 1.5x when h is
-    halved (measured 1.9x and 1.8x)."""
+    measured 0.96 % DV, 0.92 % RV with exact boundary cells, 1.8 % without), the mean
+    hoop stress at the bore within 5 % at a / h = 8 and 2.5 % at a / h = 16 (measured
+    -4.3 / -1.8 / -0.8 % at a / h = 8 / 16 / 32, DV and RV alike: the bias of a P1
+    cell's constant stress at a curved wall, falling as h; the node-by-node rms 4.5 /
+    2.0 / 0.9 %, half the plain lattice's); nu = 0.45 (in-plane nu* = 0.82, where many
+    triangles' coupling is clipped) is much harder: 10 % (DV) and 16 % (RV) at 1,243
+    nodes, and the error falls by at least 1.5x when h is halved."""
     err, hoop = _lame_lattice_errors(cls, 0.05, 0.2)
-    assert err < 0.025 and abs(hoop) < 0.025
+    assert err < 0.025 and abs(hoop) < 0.05
+    _, hoop = _lame_lattice_errors(cls, 0.025, 0.2)
+    assert abs(hoop) < 0.025
     coarse, _ = _lame_lattice_errors(cls, 0.05, 0.45)
     fine, _ = _lame_lattice_errors(cls, 0.025, 0.45)
     assert fine < coarse / 1.5 and fine < 0.10

@@ -22,7 +22,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
-from _common import parser
+from _common import PAPER, parser
 
 E, NU = 1e7, 0.2
 
@@ -45,7 +45,7 @@ def run(n_points: int, seed: int = 0, n_strains: int = 12) -> dict:
         "models": {},
     }
     for cls in (dv.DV, dv.RV):
-        model = cls(mesh, E, NU, calibration="paper", bonds="uniform")  # the paper's model
+        model = cls(mesh, E, NU, **PAPER)  # the paper's model
         c_small = float(dv.elastic_tensor(model)[0, 0])
         c = []
         for s in strains:

@@ -6,7 +6,9 @@ The linear stiffness is a sum over triangles (:mod:`dvstatic.lattice.stabilise`)
 
 ``B_T`` (3, 6) the elongation gradients of the triangle's three bonds, ``w_T`` their
 spring shares (``tri_weight * spring``), ``g_T`` the triangle's coupling stiffness and
-``M_T`` its symmetric coupling matrix (half-side gradients ``dr = M_T B_T``). The tension
+``M_T`` its symmetric coupling matrix (half-side gradients ``dr = M_T B_T``; an exact
+boundary cell, :mod:`dvstatic.lattice.cells`, holds ``g_T M_T + dQ_T`` there, with
+``g_T`` the mean of its ``w_T``, so it is damaged as a coupling is). The tension
 of bond e is ``T_e = sum_{T at e} (Q_T B_T u_T)_e``; ``K u = sum_e T_e grad(delta_e)``
 exactly, so these tensions are in equilibrium with the nodal forces.
 
@@ -207,12 +209,14 @@ def split(model: VoronoiModel) -> TriangleSplit:
     _, _, n = edge_frames(geo.x_tri)
     tri = mesh.triangles
     dofs = np.stack([2 * tri, 2 * tri + 1], axis=-1).reshape(len(tri), 6)
+    w = geo.tri_weight * op.spring[tb]
+    g = np.array(op.coupling, dtype=float)
+    m = coupling_matrices(mesh, model.barycentric_images)
+    if op.cells is not None:  # exact cells: g M + dQ, as one coupling of scale mean(w)
+        c = op.cells
+        scale = w[c].mean(axis=1)
+        m[c] = (g[c, None, None] * m[c] + op.cell_dq) / scale[:, None, None]
+        g[c] = scale
     return TriangleSplit(
-        tri_bonds=tb,
-        b=elongation_gradients(n),
-        w=geo.tri_weight * op.spring[tb],
-        g=np.array(op.coupling, dtype=float),
-        m=coupling_matrices(mesh, model.barycentric_images),
-        dofs=dofs,
-        ends=mesh.topology.bonds,
+        tri_bonds=tb, b=elongation_gradients(n), w=w, g=g, m=m, dofs=dofs, ends=mesh.topology.bonds
     )

@@ -100,12 +100,19 @@ class LatticeOperator:
     barycentric : bool
         True for DV (circumcentre images with reference barycentric coordinates),
         False for RV (current circumcentres).
+    cells : ndarray of int, shape (k,), optional
+        Triangles with an exact-cell term (:mod:`dvstatic.lattice.cells`).
+    cell_dq : ndarray, shape (k, 3, 3), optional
+        Their bond matrices ``dQ_T`` (force / length): tensions ``dQ_T e_T`` of the
+        triangle's three bond elongations ``e_T = l' - l`` add to the bonds'.
     """
 
     mesh: Mesh
     spring: np.ndarray
     coupling: np.ndarray
     barycentric: bool = True
+    cells: np.ndarray | None = None
+    cell_dq: np.ndarray | None = None
     assembly_seconds: float = field(default=0.0, init=False)
 
     def __post_init__(self) -> None:
@@ -113,6 +120,36 @@ class LatticeOperator:
         coupling = np.broadcast_to(np.asarray(self.coupling, dtype=float), (self.mesh.n_triangles,))
         object.__setattr__(self, "spring", spring)
         object.__setattr__(self, "coupling", coupling)
+        if (self.cells is None) != (self.cell_dq is None):
+            raise InputError("cells and cell_dq go together", "cells")
+        if self.cells is not None:
+            cells = np.asarray(self.cells, dtype=np.int64)
+            dq = np.asarray(self.cell_dq, dtype=float)
+            if dq.shape != (len(cells), 3, 3):
+                raise InputError(
+                    f"cell_dq must have shape ({len(cells)}, 3, 3), got {dq.shape}", "cell_dq"
+                )
+            object.__setattr__(self, "cells", cells if len(cells) else None)
+            object.__setattr__(self, "cell_dq", dq if len(cells) else None)
+
+    @cached_property
+    def _cell_of(self) -> np.ndarray:
+        """Position of every triangle in :attr:`cells` (-1 if not a cell), shape (M,)."""
+        out = np.full(self.mesh.n_triangles, -1, dtype=np.int64)
+        out[self.cells] = np.arange(len(self.cells))
+        return out
+
+    @cached_property
+    def _cell_b(self) -> np.ndarray:
+        """Reference elongation gradients (k, 3, 6) of the cells."""
+        return elongation_gradients(edge_frames(self.geometry.x_tri[self.cells])[2])
+
+    def _cell_tension(self, elong: np.ndarray) -> np.ndarray:
+        """The cells' share of the bond tensions (n_bonds,) for their bonds'
+        elongations ``elong`` (k, 3)."""
+        f = np.einsum("mkl,ml->mk", self.cell_dq, elong)
+        tb = self.mesh.topology.tri_bonds[self.cells]
+        return np.bincount(tb.ravel(), f.ravel(), self.mesh.n_bonds)
 
     @cached_property
     def geometry(self) -> _geometry.Geometry:
@@ -186,6 +223,9 @@ class LatticeOperator:
                 dr = self.coupling[sl, None] * (g.tri_r[sl] - rt)
                 change += np.bincount(topo.tri_bonds[sl].ravel(), dr.ravel(), len(g.length))
             t = t - change
+        if self.cells is not None:
+            tb = self.mesh.topology.tri_bonds[self.cells]
+            t = t + self._cell_tension(length[tb] - g.length[tb])
         return t, d, length
 
     def bond_tension(self, u, strain=None) -> np.ndarray:
@@ -226,6 +266,9 @@ class LatticeOperator:
                     )
                 rt = self.coupling[sl, None] * np.einsum("mkj,mj->mk", dr, ut.reshape(len(ut), 6))
                 t = t + np.bincount(topo.tri_bonds[sl].ravel(), rt.ravel(), len(t))
+        if self.cells is not None:  # no cells on periodic meshes: no strain term
+            ut = u[self.mesh.triangles[self.cells]].reshape(len(self.cells), 6)
+            t = t + self._cell_tension(np.einsum("mkj,mj->mk", self._cell_b, ut))
         return t
 
     # ------------------------------------------------------------ matrices
@@ -254,6 +297,11 @@ class LatticeOperator:
                 _, dr = half_sides(y, self._bary(sl), grad=True)
             q = q + self.coupling[sl, None, None] * dr
         ke = np.matmul(b.transpose(0, 2, 1), q)
+        if self.cells is not None:
+            loc = self._cell_of[sl]
+            at = np.flatnonzero(loc >= 0)
+            bc = b[at]
+            ke[at] += np.matmul(bc.transpose(0, 2, 1), np.matmul(self.cell_dq[loc[at]], bc))
         if tension is not None:
             s = g.tri_weight[sl] * tension[tri_bonds] / length
             proj = np.eye(2) - n[..., :, None] * n[..., None, :]

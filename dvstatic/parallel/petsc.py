@@ -291,10 +291,16 @@ def _prepare(PETSc, comm, model, supports, loads, opts, seconds: dict) -> _Setup
         plane=model.plane,
         thickness=model.thickness,
         materials={k: (m.E, m.nu) for k, m in model.materials.items()},
+        boundary_cells=model.boundary_cells,
     )
     object.__setattr__(pm, "bond_weight", patch_bond_weights(model, lay))  # cached
+    tri_global = patch_triangles(model.mesh, lay)
+    # the exact cells are the whole mesh's boundary triangles, not the patch's
+    is_cell = np.zeros(mesh.n_triangles, dtype=bool)
+    is_cell[model.cell_triangles] = True
+    object.__setattr__(pm, "cell_triangles", np.flatnonzero(is_cell[tri_global]))
     if model.micro_field is not None:  # a mesh calibrated class by class: its triangles'
-        field = model.micro_field.restricted(patch_triangles(model.mesh, lay))
+        field = model.micro_field.restricted(tri_global)
         object.__setattr__(pm, "micro_field", field)  # the cached_property
     cnew = 2 * lay.new_of[dofs // 2] + dofs % 2
     order = np.argsort(cnew)

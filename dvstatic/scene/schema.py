@@ -190,6 +190,16 @@ SCHEMA: dict[str, F] = {
                 default="auto",
                 choices=("auto", "surface", "fabric", "uniform", "voronoi"),
             ),
+            "boundary_cells": F(
+                "string",
+                "exact (the triangles with a vertex on the boundary carry the material's "
+                "isotropic tensor through a coupling of their three bonds: exactly P1 "
+                "where the cells are cut to fit the boundary) or lattice (the plain "
+                "lattice everywhere). The paper's model: calibration = paper, bonds = "
+                "uniform, boundary_cells = lattice",
+                default="exact",
+                choices=("exact", "lattice"),
+            ),
         },
     ),
     "supports": F(

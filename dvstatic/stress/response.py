@@ -56,6 +56,7 @@ def companion(model: VoronoiModel, material: int) -> VoronoiModel:
             bonds=model.bonds,
             plane=model.plane,
             thickness=model.thickness,
+            boundary_cells=model.boundary_cells,
         )
         cache[material].share_calibration_flags(model)
     return cache[material]

@@ -1,0 +1,109 @@
+"""Exact boundary cells: the triangles at the boundary carry the continuum's tensor.
+
+Each linear DV/RV triangle is a P1 element with its own tensor ``C_T = E_T^T Q_T E_T /
+A_T`` (:func:`dvstatic.lattice.stabilise.triangle_tensors`): ``E_T`` (3 bonds, 3 Mandel
+strains) holds the elongations of its bonds per unit strain, ``E_T[k] = l_k (nx^2, ny^2,
+sqrt(2) nx ny)``, and ``Q_T`` (3, 3) its bond matrix (springs and coupling). Inside a
+regular or relaxed lattice ``C_T`` is right on average; the triangles cut to fit a
+boundary are not (at a curved boundary their mean is up to 20 % too stiff:
+``validation/boundary_layer.py``), and that layer carries most of the lattice's
+displacement error and the stress error at a hole's wall.
+
+An *exact cell* adds to its triangle the bond matrix ``dQ_T = A_T E_T^-T C E_T^-1 - Q_T``,
+so that its tensor is the isotropic ``C`` of its material: the triangle is exactly P1.
+The term acts on the triangle's three bond elongations ``e`` (the exact ones, ``l' -
+l``, in the nonlinear model): an energy ``e.dQ e / 2`` whose tensions ``dQ e`` add to
+the bonds' own, so forces, tangent, stresses and fracture criteria read it as any other
+part of the tension. A damaged cell keeps ``min(d)`` of it, as of its Voronoi coupling
+(:mod:`dvstatic.lattice.damage`): a cracked cell falls back to its springs.
+
+Slivers (smallest angle below about 3 degrees, :data:`CELL_SINE`) stay lattice
+triangles: their ``E_T`` is near singular.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..mesh import Mesh
+from . import geometry as _geometry
+from .kinematics import edge_frames
+from .stabilise import reference_matrices
+
+__all__ = [
+    "BOUNDARY_CELLS",
+    "boundary_triangles",
+    "isotropic_tensor",
+    "unit_elongations",
+    "cell_corrections",
+]
+
+#: choices of ``boundary_cells`` of :class:`dvstatic.DV` / :class:`dvstatic.RV`
+BOUNDARY_CELLS = ("exact", "lattice")
+#: triangles whose smallest angle has a sine below this (about 3 degrees) stay lattice
+#: triangles: ``E_T^-1`` grows as 1 / sine and would make the cell needlessly stiff
+CELL_SINE = 0.05
+
+
+def boundary_triangles(mesh: Mesh) -> np.ndarray:
+    """Indices of the triangles with a vertex on the mesh's boundary (holes, inner
+    boundaries and straight edges alike), slivers (:data:`CELL_SINE`) left out, shape
+    (k,) int; empty for periodic meshes."""
+    if mesh.is_periodic:
+        return np.zeros(0, dtype=np.int64)
+    on = np.zeros(mesh.n_points, dtype=bool)
+    on[mesh.boundary_nodes] = True
+    g = _geometry.of(mesh)
+    length = g.tri_l
+    sine = 2.0 * g.tri_area[:, None] / (length * np.roll(length, 1, axis=1))
+    return np.flatnonzero(on[mesh.triangles].any(axis=1) & (sine.min(axis=1) >= CELL_SINE))
+
+
+def isotropic_tensor(E: float, nu: float) -> np.ndarray:
+    """The in-plane isotropic tensor (Mandel, (3, 3), units of E) of the in-plane
+    constants ``E``, ``nu`` (plane stress; plane strain passes ``E*``, ``nu*``)."""
+    c = E / (1.0 - nu * nu)
+    return c * np.array([[1.0, nu, 0.0], [nu, 1.0, 0.0], [0.0, 0.0, 1.0 - nu]])
+
+
+def unit_elongations(mesh: Mesh, idx: np.ndarray) -> np.ndarray:
+    """``E_T`` (k, 3 bonds, 3 Mandel strains) of triangles ``idx``: the elongation of
+    every local bond per unit strain (length units)."""
+    _, length, n = edge_frames(_geometry.of(mesh).x_tri[idx])
+    nm = np.stack([n[..., 0] ** 2, n[..., 1] ** 2, np.sqrt(2.0) * n[..., 0] * n[..., 1]], -1)
+    return length[..., None] * nm
+
+
+def cell_corrections(
+    mesh: Mesh,
+    idx: np.ndarray,
+    spring: np.ndarray,
+    coupling: np.ndarray,
+    barycentric: bool,
+    tensors: np.ndarray,
+) -> np.ndarray:
+    """``dQ_T = A_T E_T^-T C_T E_T^-1 - Q_T`` of triangles ``idx``, shape (k, 3, 3).
+
+    Parameters
+    ----------
+    mesh : Mesh
+    idx : ndarray of int, shape (k,)
+        The cells (:func:`boundary_triangles`).
+    spring : ndarray, shape (n_bonds,)
+        Spring stiffness of every bond (force / length).
+    coupling : ndarray, shape (M,)
+        Coupling stiffness of every triangle (force / length).
+    barycentric : bool
+        DV (True) or RV (False).
+    tensors : ndarray, shape (k, 3, 3) or (3, 3)
+        The tensor each cell is to have (Mandel, units of E times the thickness).
+    """
+    g = _geometry.of(mesh)
+    e_inv = np.linalg.inv(unit_elongations(mesh, idx))
+    c = np.broadcast_to(tensors, (len(idx), 3, 3))
+    target = g.tri_area[idx, None, None] * np.einsum("mki,mkl,mlj->mij", e_inv, c, e_inv)
+    w = g.tri_weight[idx] * np.asarray(spring)[mesh.topology.tri_bonds[idx]]
+    q = np.asarray(coupling)[idx, None, None] * reference_matrices(g, barycentric, idx)
+    q[:, [0, 1, 2], [0, 1, 2]] += w
+    dq = target - q
+    return 0.5 * (dq + dq.transpose(0, 2, 1))
