@@ -36,6 +36,7 @@ __all__ = [
     "isotropic_tensor",
     "unit_elongations",
     "cell_corrections",
+    "cell_tensors",
 ]
 
 #: choices of ``boundary_cells`` of :class:`dvstatic.DV` / :class:`dvstatic.RV`
@@ -107,3 +108,11 @@ def cell_corrections(
     q[:, [0, 1, 2], [0, 1, 2]] += w
     dq = target - q
     return 0.5 * (dq + dq.transpose(0, 2, 1))
+
+
+def cell_tensors(mesh: Mesh, idx: np.ndarray, dq: np.ndarray) -> np.ndarray:
+    """The tensors (k, 3, 3, Mandel) that bond matrices ``dq`` (k, 3, 3) add to
+    triangles ``idx``: ``E_T^T dQ_T E_T / A_T``."""
+    e = unit_elongations(mesh, idx)
+    area = _geometry.of(mesh).tri_area[idx, None, None]
+    return np.einsum("mki,mkl,mlj->mij", e, dq, e) / area

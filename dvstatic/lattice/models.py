@@ -37,12 +37,12 @@ from .cells import (
     BOUNDARY_CELLS,
     boundary_triangles,
     cell_corrections,
+    cell_tensors,
     isotropic_tensor,
-    unit_elongations,
 )
 from .operator import RESIDUAL, LatticeOperator
 from .stabilise import clip_coupling, triangle_modes, triangle_tensors
-from .weights import BONDS, bond_weights, resolve_bonds, voronoi_weights
+from .weights import BONDS, bond_weights, mixed_springs, resolve_bonds, voronoi_weights
 
 if TYPE_CHECKING:  # annotations only: scipy is imported where it is used
     import scipy.sparse as sp
@@ -445,7 +445,7 @@ class VoronoiModel:
             coupling = np.full(self.mesh.n_triangles, self.t * k_n * nu_m)
         else:
             k_tri, nu_tri = self._triangle_constants()
-            spring = self.t * self.bond_weight * _bond_mix(self.geometry, self.mesh, k_tri)
+            spring = self.t * self.bond_weight * mixed_springs(self.geometry, self.mesh, k_tri)
             coupling = self.t * k_tri * nu_tri
         stab = np.array([m.stabilised for m in self.micros])[mat]
         if stab.any():
@@ -577,9 +577,7 @@ class VoronoiModel:
         op = self.operator
         out = triangle_tensors(self.mesh, op.spring, op.coupling, self.barycentric_images)
         if op.cells is not None:  # exact cells: diag(w) + g M + dQ
-            e = unit_elongations(self.mesh, op.cells)
-            area = self.geometry.tri_area[op.cells, None, None]
-            out[op.cells] += np.einsum("mki,mkl,mlj->mij", e, op.cell_dq, e) / area
+            out[op.cells] += cell_tensors(self.mesh, op.cells, op.cell_dq)
         return out
 
     def energy(self, u) -> float:
@@ -606,22 +604,6 @@ def check_model(model) -> VoronoiModel:
     if not isinstance(model, VoronoiModel):
         raise TypeError(f"model must be a dvstatic DV or RV model, got {type(model).__name__}")
     return model
-
-
-def _bond_mix(geom: _geometry.Geometry, mesh: Mesh, k_tri: np.ndarray) -> np.ndarray:
-    """Spring stiffness of every bond from its triangles' ``k_tri`` (M,), each in
-    proportion to its (non-negative) share of the bond's Voronoi side; equal shares
-    where the side vanishes. Shape (n_bonds,)."""
-    topo = mesh.topology
-    bt, bl = topo.bond_tris, topo.bond_local
-    two = bt[:, 1] >= 0
-    r1 = np.maximum(geom.tri_r[bt[:, 0], bl[:, 0]], 0.0)
-    t2, l2 = np.maximum(bt[:, 1], 0), np.maximum(bl[:, 1], 0)
-    r2 = np.where(two, np.maximum(geom.tri_r[t2, l2], 0.0), 0.0)
-    total = r1 + r2
-    s1 = np.where(total > 0, r1 / np.where(total > 0, total, 1.0), np.where(two, 0.5, 1.0))
-    k2 = np.where(two, k_tri[t2], 0.0)
-    return s1 * k_tri[bt[:, 0]] + (1.0 - s1) * k2
 
 
 @dataclass(frozen=True, eq=False, repr=False)

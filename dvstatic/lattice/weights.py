@@ -28,6 +28,7 @@ __all__ = [
     "fabric_factors",
     "node_fabric",
     "bond_weights",
+    "mixed_springs",
     "default_bonds",
     "resolve_bonds",
 ]
@@ -208,3 +209,19 @@ def bond_weights(scheme: str, mesh: Mesh) -> np.ndarray:
         w = voronoi_weights(_geometry.of(mesh))
     w.setflags(write=False)
     return w
+
+
+def mixed_springs(geom: Geometry, mesh: Mesh, k_tri: np.ndarray) -> np.ndarray:
+    """Spring stiffness of every bond from its triangles' ``k_tri`` (M,), each in
+    proportion to its (non-negative) share of the bond's Voronoi side; equal shares
+    where the side vanishes. Shape (n_bonds,)."""
+    topo = mesh.topology
+    bt, bl = topo.bond_tris, topo.bond_local
+    two = bt[:, 1] >= 0
+    r1 = np.maximum(geom.tri_r[bt[:, 0], bl[:, 0]], 0.0)
+    t2, l2 = np.maximum(bt[:, 1], 0), np.maximum(bl[:, 1], 0)
+    r2 = np.where(two, np.maximum(geom.tri_r[t2, l2], 0.0), 0.0)
+    total = r1 + r2
+    s1 = np.where(total > 0, r1 / np.where(total > 0, total, 1.0), np.where(two, 0.5, 1.0))
+    k2 = np.where(two, k_tri[t2], 0.0)
+    return s1 * k_tri[bt[:, 0]] + (1.0 - s1) * k2
