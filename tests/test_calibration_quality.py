@@ -259,7 +259,7 @@ def test_an_anisotropic_fabric_is_named_in_a_warning():
     assert flag.kind == "anisotropy" and flag.where == "the whole mesh"
     assert flag.spread == pytest.approx(0.25) and "anisotropic" in flag.message()
     for kind in ("random", "cvt", "jittered"):  # deviators up to 0.16 at single nodes
-        r = dv.mesh.rectangle(2, 1, 0.01, kind=kind, seed=4)
+        r = dv.mesh.rectangle(2, 1, 0.02, kind=kind, seed=4)
         assert anisotropy_flags(dv.Mesh(r.points, r.triangles)) == [], kind
     assert ANISOTROPY < 0.25
 

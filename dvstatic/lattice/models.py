@@ -40,6 +40,7 @@ from .cells import (
     cell_tensors,
     isotropic_tensor,
 )
+from .flags import model_flags
 from .operator import RESIDUAL, LatticeOperator
 from .stabilise import clip_coupling, triangle_modes, triangle_tensors
 from .weights import BONDS, bond_weights, mixed_springs, resolve_bonds, voronoi_weights
@@ -362,40 +363,7 @@ class VoronoiModel:
         a spread beyond the samples' reach; :mod:`dvstatic.lattice.calibration.quality`),
         each logged once as a warning; empty for meshes with a recipe, periodic meshes
         and given micro-parameters."""
-        s = self.mesh.sampling
-        if (
-            not (isinstance(self.calibration, str) and self.calibration == "relaxed")
-            or self.mesh.is_periodic
-            or (s is not None and s.reproducible)
-        ):
-            return ()
-        field = self.micro_field
-        if field is not None:
-            pair = self.material_of_triangle * field.classes.n_classes
-            pair = pair + field.classes.of_triangle
-            micro_of = {m * field.classes.n_classes + c: v for (m, c), v in field.micros.items()}
-        else:
-            pair = self.material_of_triangle
-            micro_of = dict(enumerate(self.micros))
-        keys = np.array(sorted(micro_of))
-        details = [micro_of[k].details or {} for k in keys]
-        if not all("local_spread_sample" in d for d in details):
-            return ()
-        idx = np.searchsorted(keys, pair)
-        sample = np.array([d["local_spread_sample"] for d in details])[idx]
-        asked = np.array([d.get("local_spread", d["local_spread_sample"]) for d in details])
-        if field is not None:  # a class's spread is its triangles' (a selection):
-            # each region is held against the sample its class was measured on
-            flags = calibration.calibration_flags(self.mesh, sample)
-        else:
-            flags = calibration.calibration_flags(self.mesh, asked[idx], sample)
-        if all("defect_fraction" in d for d in details):
-            defects = np.array([d["defect_fraction"] for d in details])[idx]
-            flags = flags + tuple(calibration.defect_flags(self.mesh, asked[idx], defects))
-        flags = flags + tuple(calibration.anisotropy_flags(self.mesh))
-        for f in flags:
-            log.warning("calibration: %s", f.message())
-        return flags
+        return model_flags(self)
 
     def _triangle_constants(self) -> tuple[np.ndarray, np.ndarray]:
         """Every triangle's ``k_n`` and ``nu_m``, shape (M,) each."""
