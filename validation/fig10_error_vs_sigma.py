@@ -7,9 +7,10 @@ amplitudes a h (a from 0 to 0.45; boundary nodes slide along their side; Delauna
 re-triangulation), several seeds per amplitude; relative L2 error of the nodal
 displacement against the analytic solution. Meshes on which a model is unstable
 (the solver refuses them) are counted, not plotted. The paper's model
-(``calibration="paper", bonds="uniform"``) beside the defaults (no keywords: relaxed
-calibration on a periodic sample made by the mesh's recipe, half springs on the
-surface, stabilised coupling), and centroidal Voronoi (cvt) meshes of the same spacing.
+(``calibration="paper", bonds="uniform", boundary_cells="lattice"``) beside the
+defaults (no keywords: relaxed calibration on a periodic sample made by the mesh's
+recipe, half springs on the surface, stabilised coupling, exact boundary cells), and
+centroidal Voronoi (cvt) meshes of the same spacing.
 
 Usage::
 

@@ -2,8 +2,9 @@
 
 Uniaxial stress (paper exp. 3 set-up: unit square, rollers, traction -1, E = 1e5) for
 nu in {-0.9, ..., 0.9} x mesh {lattice, cvt, sigma_L 0.1, 0.2, 0.3, random} x model
-{DV, RV} x configuration {the paper's model (``calibration="paper", bonds="uniform"``),
-the defaults (relaxed calibration, stabilised coupling, half springs on the surface)}.
+{DV, RV} x configuration {the paper's model (``calibration="paper", bonds="uniform",
+boundary_cells="lattice"``), the defaults (relaxed calibration, stabilised coupling,
+half springs on the surface, exact boundary cells)}.
 For every case the admissible nu range of that mesh and these supports is computed
 (``dv.stability``); a stable case is solved (residual <= 1e-10 checked) and its error
 against the analytic solution reported; an unstable one is reported with its

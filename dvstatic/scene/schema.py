@@ -186,7 +186,7 @@ SCHEMA: dict[str, F] = {
                 "boundary bonds: no stiff surface layer), fabric (surface springs with "
                 "the local anisotropy of the cells taken out), uniform (the paper's k_n) "
                 "or voronoi (k_n sqrt(3) r/l). The paper's model: calibration = paper, "
-                "bonds = uniform",
+                "bonds = uniform, boundary_cells = lattice",
                 default="auto",
                 choices=("auto", "surface", "fabric", "uniform", "voronoi"),
             ),
