@@ -131,6 +131,25 @@ def test_convergence_quick(out):
     assert (out / "convergence_quick.png").stat().st_size > 1000
 
 
+def test_convergence_tables_come_from_the_json(tmp_path, capsys):
+    # the committed full-size JSON, printed by --markdown (no run) from a copy
+    (tmp_path / "convergence.json").write_text((VALIDATION / "out/convergence.json").read_text())
+    sys.path.insert(0, str(VALIDATION))
+    try:
+        spec = importlib.util.spec_from_file_location("convergence", VALIDATION / "convergence.py")
+        mod = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(mod)
+        assert mod.main(["--markdown", "--out", str(tmp_path)]) == 0
+    finally:
+        sys.path.remove(str(VALIDATION))
+    text = capsys.readouterr().out
+    d = json.loads((tmp_path / "convergence.json").read_text())
+    assert text.count("relative L2 error of u in %") == len(d["problems"])
+    first = d["problems"][0]["levels"][0]
+    assert f"| {first['nodes']:,} | {100 * first['results']['DV']['error']:.3g} |" in text
+    assert "decreasing under every refinement: DV yes" in text
+
+
 def test_quick_runs_never_write_the_committed_results():
     """`dvstatic validate --quick` overwrote the committed full-size JSON in
     validation/out (fig09 went from 7,590 to 1,956 nodes): every script's command line

@@ -16,6 +16,7 @@ Usage::
 
     python validation/convergence.py            # full size (about 20 min on 2 cores)
     python validation/convergence.py --quick    # two small meshes per problem
+    python validation/convergence.py --markdown # the docs' tables from the JSON
 
 Writes ``validation/out/convergence.json`` and ``convergence.png`` (``--quick``:
 ``convergence_quick.*``) and prints the tables.
@@ -23,6 +24,7 @@ Writes ``validation/out/convergence.json`` and ``convergence.png`` (``--quick``:
 
 from __future__ import annotations
 
+import json
 import sys
 import time
 
@@ -236,8 +238,62 @@ def plot(data: dict, path) -> None:
     dvplot.save(fig, path)
 
 
+def _cell(r: dict | None) -> str:
+    if r is None or "failed" in r or r.get("error") is None:
+        return "failed"
+    e = 100 * r["error"]
+    return "exact" if e < 1e-6 else f"{e:.3g}"
+
+
+def _per_level(p: dict, value, names) -> str:
+    parts = []
+    for lv in p["levels"]:
+        res = lv["results"]
+        cells = [f"{n} {value(res[n])}" for n in names if n in res and "failed" not in res[n]]
+        parts.append(f"{lv['nodes']:,}: " + ", ".join(cells))
+    return "; ".join(parts)
+
+
+def markdown(data: dict) -> str:
+    """The per-problem tables of docs/validation.md (the ``<details>`` block) from the
+    JSON: L2 errors in %, key values, boundary stress, monotonicity."""
+    out = []
+    for p in data["problems"]:
+        names = list(p["levels"][0]["results"])
+        out.append(
+            f"**{p['problem']}** (reference: {p['reference']}); relative L2 error of u in %\n"
+        )
+        out.append("| nodes | " + " | ".join(names) + " |")
+        out.append("|---" * (len(names) + 1) + "|")
+        for lv in p["levels"]:
+            row = [_cell(lv["results"].get(n)) for n in names]
+            out.append(f"| {lv['nodes']:,} | " + " | ".join(row) + " |")
+        shown = [n for n in names if "paper" not in n]
+        for k in p["keys"]:
+            err = _per_level(p, lambda r, k=k: f"{100 * r['keys'][k['name']]['error']:+.2f}", shown)
+            ref = f"{k['reference']:.5g}"
+            out.append(f"\n{k['name']} (reference {ref}, {k['source']}), error in %: {err}")
+        if any(lv["results"]["DV"].get("boundary_stress_error") is not None for lv in p["levels"]):
+            err = _per_level(p, lambda r: f"{100 * r['boundary_stress_error']:.2g}", shown)
+            out.append(f"\nboundary stress (tangential, L2 along the boundary) error in %: {err}")
+        dec = {True: "yes", False: "no", None: "-"}
+        flags = ", ".join(f"{n} {dec[v]}" for n, v in p["decreasing"].items())
+        out.append(f"\ndecreasing under every refinement: {flags}\n")
+    return "\n".join(out)
+
+
 def main(argv: list[str] | None = None) -> int:
-    a = parser(__doc__).parse_args(argv)
+    pa = parser(__doc__)
+    pa.add_argument(
+        "--markdown",
+        action="store_true",
+        help="print the docs' per-problem tables from the existing JSON (no run)",
+    )
+    a = pa.parse_args(argv)
+    if a.markdown:
+        stem = "convergence_quick" if a.quick else "convergence"
+        print(markdown(json.loads((a.out / f"{stem}.json").read_text())))
+        return 0
     nodes = QUICK_NODES if a.quick else NODES
     t0 = time.perf_counter()
     data = {"nodes_target": nodes, "problems": []}
