@@ -13,7 +13,9 @@ Tables:
   study (symmetry rollers, corners on the bore);
 * **peaks**: NAFEMS LE1 at point D and Kirsch's hole (the top, a corner on a symmetry
   line) at three sizes (two halvings of h);
-* **tunnel**: the tunnel example's checks as h_near halves twice;
+* **tunnel**: the tunnel example's checks and the hoop stress at every wall node as
+  h_near halves twice, seeds 0-3, with the size growing over 3 m (0.16 per metre, the
+  example's grading until 2026-12-05) and over 6 m (0.08, the example's now);
 * **displacement**: Cook's membrane (tip deflection) and Timoshenko's cantilever
   (relative L2 error) on the default, cvt and random meshes at three sizes;
 * **tension**: the first break in direct tension between roller grips.
@@ -184,17 +186,49 @@ def peak_row(name: str, kind: str, nodes: int) -> dict:
 
 
 # ------------------------------------------------------------------ examples
-def example_checks(name: str, overrides=()) -> dict:
+def example_checks(name: str, overrides=(), keep: bool = False) -> dict:
+    """An example's printed checks (relative differences); ``keep``: with the scene,
+    mesh and solution under ``_scene``, ``_mesh``, ``_solution``."""
     sc = dv.scene.load(EXAMPLES / f"{name}.toml", overrides)
     mesh = sc.build_mesh()
     sol = dv.solve(sc.build_model(mesh), sc.build_supports(mesh), sc.build_loads(mesh))
     checks = check_values(sol, sc.data["output"]["checks"])
-    return {
+    out = {
         "example": name,
         "overrides": list(overrides),
         "nodes": mesh.n_points,
         "checks": {c["name"]: c["difference"] for c in checks},
     }
+    if keep:
+        out.update(_scene=sc, _mesh=mesh, _solution=sol)
+    return out
+
+
+def tunnel_row(h_near: str, grading: str, seed: int) -> dict:
+    """The tunnel example's checks and the hoop stress at EVERY wall node (relative to
+    Lame's -2 p0 b^2 / (b^2 - a^2)) for one h_near, grading and seed."""
+    over = [f"mesh.h_near={h_near}", f"mesh.grading={grading}", f"mesh.seed={seed}"]
+    rec = example_checks("tunnel", over, keep=True)
+    sc = rec.pop("_scene")
+    mesh, sol = rec.pop("_mesh"), rec.pop("_solution")
+    wall = mesh.part_nodes("tunnel")
+    t = np.arctan2(mesh.points[wall, 1], mesh.points[wall, 0])
+    s = sol.stress()[wall]
+    c, si = np.cos(t), np.sin(t)
+    hoop = s[:, 0, 0] * si**2 + s[:, 1, 1] * c**2 - 2 * s[:, 0, 1] * si * c
+    p0 = float(sc.data["loads"][0]["p"])
+    b = float(sc.data["mesh"]["radius"])
+    err = hoop / (-2 * p0 * b**2 / (b**2 - 1.0)) - 1
+    rec.update(
+        h_near=float(h_near),
+        grading=float(grading),
+        seed=seed,
+        wall_nodes=len(wall),
+        wall_mean=float(err.mean()),
+        wall_rms=float(np.sqrt(np.mean(err**2))),
+        wall_worst=float(np.abs(err).max()),
+    )
+    return rec
 
 
 # ------------------------------------------------------------------ displacement
@@ -284,7 +318,14 @@ def main(argv=None) -> int:
         ["problem", "kind", "nodes", "value", "reference", "error"],
     )
     near = ("0.05", "0.025") if quick else ("0.05", "0.025", "0.0125")
-    out["tunnel"] = [example_checks("tunnel", [f"mesh.h_near={v}"]) for v in near]
+    seeds = (0,) if quick else (0, 1, 2, 3)
+    out["tunnel"] = [tunnel_row(v, g, seed) for g in ("3.0", "6.0") for v in near for seed in seeds]
+    _table(
+        "tunnel wall: hoop stress at every wall node (grading 3.0 was the example's until "
+        "2026-12-05, 6.0 is now)",
+        out["tunnel"],
+        ["grading", "h_near", "seed", "nodes", "wall_mean", "wall_rms", "wall_worst"],
+    )
     out["examples"] = [example_checks(n) for n in ("thick_cylinder", "tunnel", "plate_with_hole")]
     for rec in out["tunnel"] + out["examples"]:
         print(
@@ -324,10 +365,10 @@ def _table(title: str, rows: list[dict], cols: list[str]) -> None:
         cells = []
         for c in cols:
             v = r[c]
-            if isinstance(v, float) and c not in ("value", "reference"):
+            if isinstance(v, float) and c not in ("value", "reference", "h_near", "grading"):
                 cells.append(
                     f"{v:>+14.2%}"
-                    if c in ("error", "hoop_mean", "corner_on_symmetry_line")
+                    if c in ("error", "hoop_mean", "corner_on_symmetry_line", "wall_mean")
                     else f"{v:>14.2%}"
                 )
             elif isinstance(v, float):
