@@ -200,7 +200,8 @@ def test_tunnel(tmp_path):
     hoop = -2 * p0 * b**2 / (b**2 - a**2)
     pr = d["probes"]
     assert pr["fe_stress"][0][0][0] == pytest.approx(hoop, rel=0.02)
-    assert pr["stress"][0][0][0] == pytest.approx(hoop, rel=0.12)
+    # the crown is one wall node: -2.0 % (the wall's rms over seeds 0-3, 1.6-1.9 %)
+    assert pr["stress"][0][0][0] == pytest.approx(hoop, rel=0.04)
     assert pr["displacement"][0][1] == pytest.approx(pr["fe_displacement"][0][1], rel=0.06)
 
 

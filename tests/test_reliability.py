@@ -222,3 +222,28 @@ def test_linear_solve_warns_when_displacements_are_large(caplog):
         sol = dv.solve(model, dv.Fix("left"), dv.Traction("right", (0.0, -5.0)))
     assert sol.max_displacement > 0.1 * 3.0
     assert any("nonlinear=True" in r.getMessage() for r in caplog.records)
+
+
+def test_a_model_whose_stress_was_recovered_is_freed_with_it():
+    """The stress recovery is cached per model; it held its model strongly, so every
+    model ever recovered stayed alive with its factorisation (validation/convergence.py
+    grew to 23.8 GB and was killed)."""
+    import gc
+    import weakref
+
+    from dvstatic._cache import cache_info
+
+    mesh = dv.mesh.rectangle(2.0, 1.0, 0.05, seed=3)
+    model = dv.DV(mesh, 1e4, 0.3)
+    sol = dv.solve(
+        model,
+        [dv.Fix("left", x=0.0), dv.Fix(at=(0.0, 0.0), y=0.0)],
+        [dv.Traction("right", (1.0, 0.0))],
+    )
+    assert sol.stress()[:, 0, 0] == pytest.approx(1.0, abs=1e-9)
+    refs = [weakref.ref(o) for o in (mesh, model, sol)]
+    del mesh, model, sol
+    gc.collect()
+    assert [r() for r in refs] == [None, None, None]
+    info = cache_info()
+    assert info["stress recoveries"] == info["factorisations"] == info["geometry"] == 0

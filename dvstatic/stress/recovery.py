@@ -30,6 +30,7 @@ Three steps, each a linear map (built once per model and set of supports, cached
 from __future__ import annotations
 
 import logging
+import weakref
 
 import numpy as np
 
@@ -110,7 +111,11 @@ class Recovery:
 
     def __init__(self, model: VoronoiModel, fixed: np.ndarray):
         mesh = model.mesh
-        self.model, self.fixed = model, fixed
+        # weakly: the recovery is cached per model (recovery_of), and a strong reference
+        # from the cached value to its key would keep every model that was ever
+        # recovered alive, with its factorisation (a long sweep ran out of memory)
+        self._model = weakref.ref(model)
+        self.fixed = fixed
         self.node_mat = node_material(model)
         self.consts = np.array([m.in_plane for m in model.all_materials])
         self.area = model.geometry.dual_area
@@ -132,6 +137,14 @@ class Recovery:
         self.uncorrected = 0
         self._pending = set(range(len(self.consts))) if self.boundary is not None else set()
         self._responses: dict[int, np.ndarray] = {}
+
+    @property
+    def model(self) -> VoronoiModel:
+        """The model this recovery was built for."""
+        model = self._model()
+        if model is None:  # only reachable through a recovery kept past its model
+            raise ReferenceError("the model of this stress recovery no longer exists")
+        return model
 
     # -- the estimate ----------------------------------------------------------------
     def estimate(self, model: VoronoiModel, u: np.ndarray, body=None) -> np.ndarray:
