@@ -219,6 +219,13 @@ def test_a_steep_grading_is_warned_about(caplog):
     with caplog.at_level(logging.WARNING, logger="dvstatic.mesh.graded"):
         dv.mesh.size_near(domain, "boundary", 0.0125, 0.5, 6.0)  # 0.08: the tunnel's
     assert "grows by" not in caplog.text
+    # any size field given as h, checked on the generator's probe grid
+    with caplog.at_level(logging.WARNING, logger="dvstatic.mesh.graded"):
+        dv.mesh.rectangle(2.0, 1.0, lambda x: 0.1 + 0.05 * x[:, 0], kind="cvt")
+    assert "grows by" not in caplog.text
+    with caplog.at_level(logging.WARNING, logger="dvstatic.mesh.graded"):
+        dv.mesh.rectangle(2.0, 1.0, lambda x: 0.1 + 0.2 * x[:, 0], kind="cvt")
+    assert "grows by up to 0.2 per unit length" in caplog.text
 
 
 def test_the_tunnel_walls_stress_is_right_in_the_mean_at_every_wall_node():

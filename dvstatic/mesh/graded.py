@@ -65,6 +65,8 @@ class SizeField:
         values = self(np.vstack([probe, curves]))
         self.min = float(values.min())
         self.max = float(values.max())
+        if not getattr(fn, "slope_checked", False):  # size_near checks its own
+            _warn_steep(xx, yy, domain, self)
         if self.max > float(np.min(hi - lo)):
             raise InputError(
                 f"the size field reaches h = {self.max:.4g}, larger than the domain "
@@ -87,6 +89,33 @@ class SizeField:
         if not np.all(np.isfinite(h)) or np.any(h <= 0):
             raise InputError("the size field h(x) must be finite and > 0 everywhere", "h")
         return h
+
+
+def _warn_steep(xx: np.ndarray, yy: np.ndarray, domain: Domain, h: SizeField) -> None:
+    """Log a warning where the size field grows faster than :data:`MAX_GRADING`,
+    measured between neighbouring points of the probe grid inside the domain."""
+    inside = domain.contains(np.c_[xx.ravel(), yy.ravel()]).reshape(xx.shape)
+    hv = np.full(xx.shape, np.nan)
+    hv[inside] = h(np.c_[xx[inside], yy[inside]])
+    dx, dy = xx[0, 1] - xx[0, 0], yy[1, 0] - yy[0, 0]
+    gx = np.abs(np.diff(hv, axis=1)) / dx
+    gy = np.abs(np.diff(hv, axis=0)) / dy
+    slope = np.fmax(
+        np.pad(gx, ((0, 0), (0, 1)), constant_values=np.nan),
+        np.pad(gy, ((0, 1), (0, 0)), constant_values=np.nan),
+    )
+    if not np.any(slope > MAX_GRADING):
+        return
+    i = np.unravel_index(np.nanargmax(slope), slope.shape)
+    log.warning(
+        "the size field grows by up to %.3g per unit length (near (%.4g, %.4g)), more "
+        "than %g: the lattice relaxes unevenly across so steep a grading and stresses "
+        "near the fine region can be biased by several percent",
+        slope[i],
+        xx[i],
+        yy[i],
+        MAX_GRADING,
+    )
 
 
 def local_h(h, p: np.ndarray) -> np.ndarray | float:
@@ -211,4 +240,5 @@ def size_near(domain: Domain, parts, h_near: float, h: float, distance: float):
             dist = np.minimum(dist, domain.region_distances(x)[:, rsel].min(axis=1))
         return h_near + (h - h_near) * np.clip(dist / distance, 0.0, 1.0)
 
+    field.slope_checked = True  # warned above, with the distance to use
     return field
