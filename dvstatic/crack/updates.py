@@ -28,7 +28,11 @@ from ..mesh import mesh_dof_order
 
 log = logging.getLogger(__name__)
 
-__all__ = ["UpdatedSolver"]
+__all__ = ["UpdatedSolver", "FLOOR_FACTOR"]
+
+#: after a fresh factorisation missed the tolerance (residual ``floor``), an update is
+#: refactorised only when it misses ``FLOOR_FACTOR * floor``
+FLOOR_FACTOR = 10.0
 
 
 class UpdatedSolver:
@@ -75,6 +79,7 @@ class UpdatedSolver:
             self._w = np.empty((48, 48))
         self._u_cols = None
         self._y0: dict[str, tuple] = {}  # A0^-1 b for each unchanged right-hand side
+        self.floor = 0.0  # the residual a direct solve reached where it missed tol
         self.factorisations += 1
         self.factor_seconds += time.perf_counter() - t0
 
@@ -186,10 +191,14 @@ class UpdatedSolver:
         if self.rank > self.max_rank:
             self.rebase(w, g)
         x, res = self._refined(w, g, tol, f)
-        if res > tol and self.rank:
+        if res > max(tol, FLOOR_FACTOR * self.floor) and self.rank:
             log.debug("update missed the tolerance (%.2e): refactorising", res)
             self.rebase(w, g)
             x, res = self._refined(w, g, tol, f)
+            # a fresh factorisation that misses tol too: the state is near a mechanism
+            # and this is what a direct solve reaches; later updates are held to it
+            # instead of refactorising at every solve
+            self.floor = res if res > tol else 0.0
         return x, res
 
     def _refined(self, w, g, tol: float, f=None):
