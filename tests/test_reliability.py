@@ -233,6 +233,8 @@ def test_a_model_whose_stress_was_recovered_is_freed_with_it():
 
     from dvstatic._cache import cache_info
 
+    gc.collect()
+    before = cache_info()  # other tests' objects may be alive: count what this adds
     mesh = dv.mesh.rectangle(2.0, 1.0, 0.05, seed=3)
     model = dv.DV(mesh, 1e4, 0.3)
     sol = dv.solve(
@@ -245,5 +247,6 @@ def test_a_model_whose_stress_was_recovered_is_freed_with_it():
     del mesh, model, sol
     gc.collect()
     assert [r() for r in refs] == [None, None, None]
-    info = cache_info()
-    assert info["stress recoveries"] == info["factorisations"] == info["geometry"] == 0
+    after = cache_info()
+    for name in ("stress recoveries", "factorisations", "geometry", "sparsity pattern"):
+        assert after[name] <= before.get(name, 0), name
