@@ -145,7 +145,7 @@ def _run_fracture(sc, model, supports, loads, folder, args, say, t0: float) -> i
         written = []
         data = res.to_dict()
         data["checks"] = fracture_checks(res, sc.data["fracture"]["checks"])
-        data["model"] = repr(model)
+        data["model"] = repr(res.model)  # the lattice that broke (no exact cells)
         data["scene"] = _scene_record(sc, args)
         data["dvstatic_version"] = __version__
         data["created"] = datetime.now(UTC).isoformat(timespec="seconds")

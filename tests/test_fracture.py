@@ -766,7 +766,7 @@ def test_fracture_breaks_the_plain_lattice_at_the_boundary():
     kw = dict(ft=FT, gf=5e-4, max_events=40, stop_load_ratio=0.0)
     res = dv.fracture(model, sup, loads, **kw)
     plain = dv.fracture(dataclasses.replace(model, boundary_cells="lattice"), sup, loads, **kw)
-    assert res.model.boundary_cells == "lattice"
+    assert res.model.boundary_cells == "lattice" and len(res.events) == 40
     assert [e.bond for e in res.events] == [e.bond for e in plain.events]
     np.testing.assert_allclose(
         [e.load_factor for e in res.events], [e.load_factor for e in plain.events], rtol=1e-12

@@ -69,7 +69,7 @@ def _held_equilibrium(model, res, held) -> float:
     if not held:
         return 0.0
     mesh = model.mesh
-    s = split(model)
+    s = split(res.model)  # the lattice that broke (dv.fracture gives back exact cells)
     dofs, values = constraints(mesh, list(res.supports))
     fh = load_vector(mesh, list(held), thickness=model.t)
     f = load_vector(mesh, list(res.loads), thickness=model.t) if res.loads else 0.0 * fh

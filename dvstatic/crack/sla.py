@@ -87,7 +87,7 @@ def fracture_model(model: VoronoiModel) -> VoronoiModel:
         "(boundary_cells='lattice'): cells have no softening law",
         len(model.cell_triangles),
     )
-    return dataclasses.replace(model, boundary_cells="lattice")
+    return model.replaced(boundary_cells="lattice")
 
 
 def _check_start(model, start) -> None:

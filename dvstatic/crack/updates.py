@@ -28,11 +28,13 @@ from ..mesh import mesh_dof_order
 
 log = logging.getLogger(__name__)
 
-__all__ = ["UpdatedSolver", "FLOOR_FACTOR"]
+__all__ = ["UpdatedSolver", "FLOOR_FACTOR", "FLOOR_CAP"]
 
 #: after a fresh factorisation missed the tolerance (residual ``floor``), an update is
-#: refactorised only when it misses ``FLOOR_FACTOR * floor``
+#: refactorised only when it misses ``FLOOR_FACTOR * floor``, and always above
+#: ``FLOOR_CAP`` (a tenth of the residual at which fracture stops)
 FLOOR_FACTOR = 10.0
+FLOOR_CAP = 1e-7
 
 
 class UpdatedSolver:
@@ -186,12 +188,15 @@ class UpdatedSolver:
         The update is refined up to three times; if it still misses ``tol`` (an update
         that leaves the matrix nearly singular, e.g. a node hanging on collinear bonds,
         makes the capacitance matrix ill-conditioned) the current matrix is factorised
-        afresh and solved directly.
+        afresh and solved directly. Where that direct solve misses ``tol`` too (near a
+        mechanism), the residual it reached is the floor until the next factorisation:
+        later updates are held to :data:`FLOOR_FACTOR` times it (at most
+        :data:`FLOOR_CAP`) instead of refactorising at every solve.
         """
         if self.rank > self.max_rank:
             self.rebase(w, g)
         x, res = self._refined(w, g, tol, f)
-        if res > max(tol, FLOOR_FACTOR * self.floor) and self.rank:
+        if res > max(tol, min(FLOOR_FACTOR * self.floor, FLOOR_CAP)) and self.rank:
             log.debug("update missed the tolerance (%.2e): refactorising", res)
             self.rebase(w, g)
             x, res = self._refined(w, g, tol, f)

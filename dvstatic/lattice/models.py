@@ -225,12 +225,15 @@ class VoronoiModel:
         times the smallest factor of its bonds (:mod:`dvstatic.lattice.damage`); the
         ``closed`` cracks (bool, n_bonds) with their whole spring. A model like any
         other: ``dv.solve``, ``Solution.stress()`` and the writers take it."""
+        return self.replaced(damage=stiffness, closed=closed)
+
+    def replaced(self, **changes) -> VoronoiModel:
+        """This lattice with ``changes`` (fields of the model other than the material
+        and the mesh), keeping its calibration as computed: micro-parameters, the field
+        of classes of a mixed mesh, the calibration flags (warned once, by this model)."""
         micros = self.micros
         out = dataclasses.replace(
-            self,
-            calibration=micros if len(micros) > 1 else micros[0],
-            damage=stiffness,
-            closed=closed,
+            self, calibration=micros if len(micros) > 1 else micros[0], **changes
         )
         object.__setattr__(out, "micro_field", self.micro_field)  # the cached_properties
         out.share_calibration_flags(self)

@@ -97,12 +97,10 @@ def _warn_steep(xx: np.ndarray, yy: np.ndarray, hv: np.ndarray) -> None:
     yy``, NaN outside the domain) grows faster than :data:`MAX_GRADING` between
     neighbouring grid points."""
     dx, dy = xx[0, 1] - xx[0, 0], yy[1, 0] - yy[0, 0]
-    gx = np.abs(np.diff(hv, axis=1)) / dx
-    gy = np.abs(np.diff(hv, axis=0)) / dy
-    slope = np.fmax(
-        np.pad(gx, ((0, 0), (0, 1)), constant_values=np.nan),
-        np.pad(gy, ((0, 1), (0, 0)), constant_values=np.nan),
-    )
+    gx = np.pad(np.diff(hv, axis=1) / dx, ((0, 0), (0, 1)), constant_values=np.nan)
+    gy = np.pad(np.diff(hv, axis=0) / dy, ((0, 1), (0, 0)), constant_values=np.nan)
+    slope = np.hypot(np.nan_to_num(gx), np.nan_to_num(gy))  # the gradient's length
+    slope[np.isnan(gx) & np.isnan(gy)] = np.nan
     if not np.any(slope > MAX_GRADING):
         return
     i = np.unravel_index(np.nanargmax(slope), slope.shape)

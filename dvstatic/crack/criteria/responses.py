@@ -149,7 +149,12 @@ def responses(model, length, area, dofs=None):
         sel = mat == k
         if not sel.any():
             continue
-        alone = dataclasses.replace(model, E=material.E, nu=material.nu, materials=None)
+        # that material's own micro-parameters (as the stress recovery's companions
+        # take them; a mesh calibrated class by class calibrates them afresh)
+        cal = "relaxed" if model.micro_field is not None else model.micros[k]
+        alone = dataclasses.replace(
+            model, E=material.E, nu=material.nu, materials=None, calibration=cal
+        )
         alone.share_calibration_flags(model)
         t_k, p_k = _uniform_response(alone, length, area, dofs)
         for c in range(3):
