@@ -186,31 +186,33 @@ def peak_row(name: str, kind: str, nodes: int) -> dict:
 
 
 # ------------------------------------------------------------------ examples
-def example_checks(name: str, overrides=(), keep: bool = False) -> dict:
-    """An example's printed checks (relative differences); ``keep``: with the scene,
-    mesh and solution under ``_scene``, ``_mesh``, ``_solution``."""
+def run_example(name: str, overrides=()):
+    """An example's scene, mesh and linear solution."""
     sc = dv.scene.load(EXAMPLES / f"{name}.toml", overrides)
     mesh = sc.build_mesh()
     sol = dv.solve(sc.build_model(mesh), sc.build_supports(mesh), sc.build_loads(mesh))
+    return sc, mesh, sol
+
+
+def example_checks(name: str, overrides=(), run=None) -> dict:
+    """An example's printed checks (relative differences); ``run``: its
+    :func:`run_example` when already solved."""
+    sc, mesh, sol = run or run_example(name, overrides)
     checks = check_values(sol, sc.data["output"]["checks"])
-    out = {
+    return {
         "example": name,
         "overrides": list(overrides),
         "nodes": mesh.n_points,
         "checks": {c["name"]: c["difference"] for c in checks},
     }
-    if keep:
-        out.update(_scene=sc, _mesh=mesh, _solution=sol)
-    return out
 
 
 def tunnel_row(h_near: str, grading: str, seed: int) -> dict:
     """The tunnel example's checks and the hoop stress at EVERY wall node (relative to
     Lame's -2 p0 b^2 / (b^2 - a^2)) for one h_near, grading and seed."""
     over = [f"mesh.h_near={h_near}", f"mesh.grading={grading}", f"mesh.seed={seed}"]
-    rec = example_checks("tunnel", over, keep=True)
-    sc = rec.pop("_scene")
-    mesh, sol = rec.pop("_mesh"), rec.pop("_solution")
+    sc, mesh, sol = run = run_example("tunnel", over)
+    rec = example_checks("tunnel", over, run)
     wall = mesh.part_nodes("tunnel")
     t = np.arctan2(mesh.points[wall, 1], mesh.points[wall, 0])
     s = sol.stress()[wall]
