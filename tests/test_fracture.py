@@ -731,7 +731,8 @@ def test_the_patch_stress_and_elongations_are_the_sums_they_stand_for():
     shares = w * elong + g[:, None] * np.einsum("mkj,mj->mk", sp_.m, elong)
     np.testing.assert_allclose(sp_.forces(u, w, g), shares, rtol=1e-12, atol=1e-12)
     f = shares * geo.tri_l * weight[:, None]
-    n = np.stack([sp_.nn[:, :, 0], sp_.nn[:, :, 3], sp_.nn[:, :, 1]], axis=2)  # xx, yy, xy
+    dn = geo.direction[sp_.tri_bonds]  # (M, 3, 2): the local edges' directions
+    n = np.stack([dn[..., 0] ** 2, dn[..., 1] ** 2, dn[..., 0] * dn[..., 1]], axis=2)  # xx, yy, xy
     tri_sig = np.einsum("mk,mkc->mc", f, n)
     a = geo.tri_area * weight
     for e in rng.choice(mesh.n_bonds, 25, replace=False):

@@ -111,7 +111,7 @@ class EventSearch:
         held loads' state)."""
         bonds = self.bonds
         w, g = self.factors()
-        intact = np.all(bonds.d[self.sp.tri_bonds] >= 1.0, axis=1).astype(float)
+        intact = self.intact()
         held = self.xh if held is None else held
         return self.criterion.critical(
             held, self.x, w, g, intact, bonds.d, bonds.threshold, bonds.sense, bonds.mode

@@ -69,10 +69,7 @@ def _state(solver, w, g, control, ref, f, fh=None):
     x, res = solver.solve(w, g, EQUILIBRIUM_TOL, fh)
     if control == "force":
         return x, res, (0.0 if fh is not None else ref), float(f @ x) / ref
-    kx = solver.K0 @ x
-    if solver.rank:
-        kx = kx + solver.delta_full(x, w, g)
-    reaction = (kx - (f if fh is None else fh))[solver.dofs]
+    reaction = solver.prescribed_forces(x, w, g) - (f if fh is None else fh)[solver.dofs]
     return x, res, float(reaction @ solver.values) / ref, (0.0 if fh is not None else ref)
 
 
@@ -301,6 +298,7 @@ class _Analysis(EventSearch):
         self.spring = np.bincount(sp_.tri_bonds.ravel(), sp_.w.ravel(), sp_.n_bonds)
         self.initial = None
         self._factors = None
+        self._intact = None
         self.snaps = Kept(opts.snapshots, opts.snapshot_every)
         self.events: list[Event] = []
         self.broken: list[int] = []
@@ -342,14 +340,37 @@ class _Analysis(EventSearch):
 
     def factors(self):
         """The damaged stiffness's factors ``(w, g)``, closed cracks with their spring
-        (kept while the damage and the contact status stay the same; read only)."""
+        (kept while the damage and the contact status stay the same; read only). Only
+        the triangles of bonds whose factor or status changed are recomputed."""
         d, closed = self.bonds.d, self.contact.closed
         memo = self._factors
-        if memo is not None and np.array_equal(memo[0], d) and np.array_equal(memo[1], closed):
-            return memo[2]
-        wg = self.sp.factors(d, closed if closed.any() else None)
+        if memo is None:
+            wg = self.sp.factors(d, closed if closed.any() else None)
+        else:
+            moved = np.flatnonzero((memo[0] != d) | (memo[1] != closed))
+            if not len(moved):
+                return memo[2]
+            tris = np.unique(self.bond_tris[moved])
+            wg = (memo[2][0].copy(), memo[2][1].copy())
+            wg[0][tris], wg[1][tris] = self.sp.factors(d, closed if closed.any() else None, tris)
         self._factors = (d.copy(), closed.copy(), wg)
         return wg
+
+    def intact(self) -> np.ndarray:
+        """1.0 for every triangle none of whose bonds is damaged, else 0.0, (M,)."""
+        d = self.bonds.d
+        memo = self._intact
+        if memo is None:
+            out = np.all(d[self.sp.tri_bonds] >= 1.0, axis=1).astype(float)
+        else:
+            moved = np.flatnonzero(memo[0] != d)
+            if not len(moved):
+                return memo[1]
+            tris = np.unique(self.bond_tris[moved])
+            out = memo[1].copy()
+            out[tris] = np.all(d[self.sp.tri_bonds[tris]] >= 1.0, axis=1)
+        self._intact = (d.copy(), out)
+        return out
 
     def start(self) -> None:
         self.solver.rebase(*self.factors())

@@ -1,19 +1,22 @@
 """Solving with a damaged stiffness: one factorisation, low-rank updates on top of it.
 
 Damage changes the 3x3 bond matrices ``Q_T`` of a few triangles per event, so the
-constrained stiffness is ``A = A0 + U C U^T``: ``A0`` the factorised base, ``U`` the
-elongation gradients of the changed triangles (three columns each, constrained rows
-zeroed) and ``C`` the block diagonal of their ``Q_T - Q_T^0``. The Woodbury identity in
-its capacitance form (no inverse of ``C`` needed, so a broken bond's rank-deficient
-change is fine)::
+constrained stiffness changes only in the rows and columns of those triangles' free
+dofs ``S``: ``A = A0 + E_S C E_S^T``, ``A0`` the factorised base, ``E_S`` the unit
+columns of ``S`` and ``C`` (``|S| x |S|``) the sum of the changed triangles'
+``B_T^T (Q_T - Q_T^0) B_T``. The Woodbury identity in its capacitance form (no inverse
+of ``C`` needed, so a broken bond's rank-deficient change is fine)::
 
-    A^-1 b = y - Z (I + C W)^-1 C U^T y,   y = A0^-1 b,  Z = A0^-1 U,  W = U^T Z.
+    A^-1 b = y - Z (I + C W)^-1 C y_S,   y = A0^-1 b,  Z = A0^-1 E_S,  W = Z_S.
 
-``Z`` gets three columns when a triangle is first touched (one multi-right-hand-side
-triangular solve); later teeth of the same triangle only change ``C``. Once the rank
-passes ``max_rank`` the current matrix is factorised afresh and becomes the base.
-Every solution is checked against the current matrix and refined (up to three steps)
-until its relative residual is below ``tol``.
+``Z`` gets two columns for every node a touched triangle brings into ``S`` (one
+multi-right-hand-side triangular solve): along a crack path that is one node, two
+columns, per new triangle (three columns per triangle when the columns were the
+triangles' bond elongations); later teeth of the same triangle only change ``C``.
+``Z`` is kept transposed (a row per dof of ``S``), so a new column is written where it
+lies. Once ``|S|`` passes ``max_rank`` the current matrix is factorised afresh and
+becomes the base. Every solution is checked against the current matrix and refined (up
+to three steps) until its relative residual is below ``tol``.
 """
 
 from __future__ import annotations
@@ -49,20 +52,23 @@ class UpdatedSolver:
     f : ndarray, shape (2N,)
         External forces per unit load factor.
     max_rank : int
-        Refactorise when the update has more columns (0: refactorise every change).
+        Refactorise when the update has more columns (free dofs of touched triangles;
+        0: refactorise every change).
     """
 
     def __init__(self, mesh, split, dofs, values, f, max_rank: int = 240):
         self.mesh, self.split = mesh, split
         self.dofs, self.values, self.f = dofs, values, f
         self.max_rank = int(max_rank)
-        self.free = np.ones(2 * mesh.n_points, dtype=bool)
+        n = 2 * mesh.n_points
+        self.free = np.ones(n, dtype=bool)
         self.free[dofs] = False
-        self.uc = np.zeros(2 * mesh.n_points)
+        self.uc = np.zeros(n)
         self.uc[dofs] = values
         self.factorisations = 0
         self.factor_seconds = 0.0
-        self._z = np.empty((len(self.free), 0))
+        self.columns_solved = 0  # columns of A0^-1 computed for S
+        self._zt = np.empty((0, n))
         self._order = mesh_dof_order(mesh)
 
     # ------------------------------------------------------------ base
@@ -72,14 +78,14 @@ class UpdatedSolver:
         self.w0, self.g0 = w.copy(), g.copy()
         self.K0 = self.split.stiffness(self.mesh, w, g)  # BSR, as ConstrainedSystem takes it
         self.system = ConstrainedSystem(self.K0, self.dofs)
+        self._b0 = self.f - self.K0 @ self.uc  # forces minus the base's prescribed motion
+        self._k0_rows = self.K0.tocsr()[self.dofs]  # the base's rows of the prescribed dofs
         self.engine = DirectSolver(self.system.A, order=self._order)
         self.touched: set[int] = set()
         self.tris = np.zeros(0, dtype=np.int64)
-        # the buffers grow (doubling, up to max_rank + 12 columns) as triangles are touched
-        if self._z.shape[1] == 0:
-            self._z = np.empty((len(self.free), 48))
-            self._w = np.empty((48, 48))
-        self._u_cols = None
+        self.cols = np.zeros(0, dtype=np.int64)  # S, in the order of Z's rows
+        self.pos = np.full(len(self.free), -1, dtype=np.int64)  # dof -> row of Z (or -1)
+        self._w = None  # W for the current S (kept until S grows)
         self._y0: dict[str, tuple] = {}  # A0^-1 b for each unchanged right-hand side
         self.floor = 0.0  # the residual a direct solve reached where it missed tol
         self.factorisations += 1
@@ -87,73 +93,86 @@ class UpdatedSolver:
 
     @property
     def rank(self) -> int:
-        return 3 * len(self.tris)
+        return len(self.cols)
 
-    def _columns(self, tris: np.ndarray):
-        """U's columns for triangles ``tris``: sparse (2N, 3 len(tris)), constrained rows 0."""
-        import scipy.sparse as sp
-
-        b = self.split.b[tris] * self.free[self.split.dofs[tris]][:, None, :]  # (t, 3, 6)
-        rows = np.broadcast_to(self.split.dofs[tris][:, None, :], b.shape).ravel()
-        cols = np.broadcast_to(np.arange(3 * len(tris)).reshape(-1, 3, 1), b.shape).ravel()
-        return sp.csc_matrix((b.ravel(), (rows, cols)), shape=(len(self.free), 3 * len(tris)))
+    @property
+    def changed(self) -> bool:
+        """Whether any triangle differs from the base (its dofs may all be prescribed)."""
+        return bool(len(self.tris))
 
     def touch(self, tris: np.ndarray) -> None:
-        """Make triangles ``tris`` part of the update (new columns of Z and W)."""
-        import scipy.sparse as sp
-
+        """Make triangles ``tris`` part of the update (new rows of Z for their new dofs)."""
         new = np.array([t for t in np.unique(tris) if int(t) not in self.touched], dtype=np.int64)
         if new.size == 0:
             return
         self.touched.update(int(t) for t in new)
-        r_old = self.rank
         self.tris = np.concatenate([self.tris, new])
-        r = self.rank
-        if r > self._z.shape[1]:
-            cap = max(r, min(2 * self._z.shape[1], self.max_rank + 12))
-            z = np.empty((len(self.free), cap))
-            z[:, :r_old] = self._z[:, :r_old]
-            w = np.empty((cap, cap))
-            w[:r_old, :r_old] = self._w[:r_old, :r_old]
-            self._z, self._w = z, w
-        u_new = self._columns(new)
-        zn = self.engine.apply(u_new.toarray())
-        u_all = u_new if self._u_cols is None else sp.hstack([self._u_cols, u_new], format="csc")
-        wn = u_all.T @ zn  # (rank, 3 len(new)): W is symmetric as A0 is
-        self._z[:, r_old:r] = zn
-        self._w[:r, r_old:r] = wn
-        self._w[r_old:r, :r_old] = wn[:r_old].T
-        self._u_cols = u_all
+        d = np.unique(self.split.dofs[new].ravel())
+        d = d[self.free[d] & (self.pos[d] < 0)]
+        if d.size == 0:
+            return
+        r_old, r = self.rank, self.rank + len(d)
+        if r > len(self._zt):  # the buffer doubles, up to max_rank + 12 rows
+            zt = np.empty((max(r, min(2 * len(self._zt), self.max_rank + 12), 48), len(self.free)))
+            zt[:r_old] = self._zt[:r_old]
+            self._zt = zt
+        e = np.zeros((len(self.free), len(d)))
+        e[d, np.arange(len(d))] = 1.0
+        self._zt[r_old:r] = self.engine.apply(e).T
+        self.columns_solved += len(d)
+        self.pos[d] = np.arange(r_old, r)
+        self.cols = np.concatenate([self.cols, d])
+        self._w = None
 
     @property
     def Z(self) -> np.ndarray:
-        return self._z[:, : self.rank]
+        """``A0^-1 E_S`` (2N, rank), a view of the transposed buffer."""
+        return self._zt[: self.rank].T
 
     @property
     def W(self) -> np.ndarray:
-        return self._w[: self.rank, : self.rank]
+        """``Z_S`` (rank, rank): the base's inverse on the touched dofs."""
+        if self._w is None:
+            self._w = self._zt[: self.rank][:, self.cols]
+        return self._w
 
     # ------------------------------------------------------------ solve
-    def _capacitance(self, w, g) -> np.ndarray:
+    def _dq(self, w, g) -> np.ndarray:
+        """``Q_T - Q_T^0`` (t, 3, 3) of the touched triangles."""
         t = self.tris
         return self.split.q(w, g, t) - self.split.q(self.w0, self.g0, t)
+
+    def _capacitance(self, w, g) -> np.ndarray:
+        """``C`` (rank, rank): the touched triangles' change of stiffness on ``S``."""
+        sp_, t = self.split, self.tris
+        ke = np.einsum("tki,tkl,tlj->tij", sp_.b[t], self._dq(w, g), sp_.b[t])  # (t, 6, 6)
+        p = self.pos[sp_.dofs[t]]  # (t, 6), -1 at constrained dofs
+        keep = (p[:, :, None] >= 0) & (p[:, None, :] >= 0)
+        r = self.rank
+        flat = (p[:, :, None] * r + p[:, None, :])[keep]
+        return np.bincount(flat, ke[keep], r * r).reshape(r, r)
 
     def apply_matrix(self, x: np.ndarray, w, g) -> np.ndarray:
         """The current constrained matrix times ``x``."""
         y = self.system.A @ x
         if self.rank:
-            c = self._capacitance(w, g)
-            ut = (self._u_cols.T @ x).reshape(-1, 3)
-            y = y + self._u_cols @ np.einsum("tij,tj->ti", c, ut).ravel()
+            y[self.cols] += self._capacitance(w, g) @ x[self.cols]
         return y
 
     def delta_full(self, x: np.ndarray, w, g) -> np.ndarray:
         """``(K - K0) x`` on all dofs (constrained rows included)."""
         sp_, t = self.split, self.tris
         elong = np.einsum("tkj,tj->tk", sp_.b[t], x[sp_.dofs[t]])
-        fq = np.einsum("tkl,tl->tk", self._capacitance(w, g), elong)
+        fq = np.einsum("tkl,tl->tk", self._dq(w, g), elong)
         fe = np.einsum("tkj,tk->tj", sp_.b[t], fq)
         return np.bincount(sp_.dofs[t].ravel(), fe.ravel(), len(x))
+
+    def prescribed_forces(self, x: np.ndarray, w, g) -> np.ndarray:
+        """``(K x)`` at the prescribed dofs (len(dofs),), for the current ``K``."""
+        out = self._k0_rows @ x
+        if self.changed:
+            out = out + self.delta_full(x, w, g)[self.dofs]
+        return out
 
     def rhs(self, w, g, f=None) -> np.ndarray:
         """Right-hand side of the current matrix: forces minus the prescribed motion; or,
@@ -162,8 +181,8 @@ class UpdatedSolver:
             b = np.array(f, dtype=float)
             b[self.dofs] = 0.0
             return b
-        b = self.f - self.K0 @ self.uc
-        if self.rank and np.any(self.values):
+        b = self._b0.copy()
+        if self.changed and np.any(self.values):
             b -= self.delta_full(self.uc, w, g)
         b[self.dofs] = self.system.diag_value * self.values
         return b
@@ -173,12 +192,8 @@ class UpdatedSolver:
         if not self.rank:
             return y
         c = self._capacitance(w, g)
-        cb = np.zeros((self.rank, self.rank))
-        i = 3 * np.arange(len(self.tris))[:, None, None]
-        cb[i + np.arange(3)[:, None], i + np.arange(3)[None, :]] = c
-        uy = self._u_cols.T @ y
-        small = np.eye(self.rank) + cb @ self.W
-        return y - self.Z @ np.linalg.solve(small, cb @ uy)
+        small = np.eye(self.rank) + c @ self.W
+        return y - self.Z @ np.linalg.solve(small, c @ y[self.cols])
 
     def solve(self, w, g, tol: float = 1e-10, f=None):
         """Displacement (2N,) per unit load factor and its relative residual; with ``f``
