@@ -93,9 +93,11 @@ class FractureTimings:
     """Wall time of the stages of a fracture analysis (s)."""
 
     setup: float = 0.0  #: the problem, the split stiffness, the criterion
-    strength: float = 0.0  #: the bonds' responses to uniform stress and their strengths
+    #: the bonds' responses to uniform stress and their strengths (with the first
+    #: factorisation, which the event loop takes over when it starts undamaged)
+    strength: float = 0.0
     events: float = 0.0  #: the event loop
-    factorisation: float = 0.0  #: of which factorising the stiffness
+    factorisation: float = 0.0  #: of which factorising the stiffness afresh
 
 
 @dataclass(frozen=True)

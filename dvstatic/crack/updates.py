@@ -72,15 +72,20 @@ class UpdatedSolver:
         self._order = mesh_dof_order(mesh)
 
     # ------------------------------------------------------------ base
-    def rebase(self, w: np.ndarray, g: np.ndarray) -> None:
-        """Factorise the stiffness of ``w, g`` and make it the base."""
+    def rebase(self, w: np.ndarray, g: np.ndarray, factorised=None) -> None:
+        """Factorise the stiffness of ``w, g`` and make it the base; ``factorised``
+        (:class:`~dvstatic.crack.criteria.responses.Factorised`): that stiffness with the
+        same prescribed dofs, factorised already."""
         t0 = time.perf_counter()
         self.w0, self.g0 = w.copy(), g.copy()
-        self.K0 = self.split.stiffness(self.mesh, w, g)  # BSR, as ConstrainedSystem takes it
-        self.system = ConstrainedSystem(self.K0, self.dofs)
+        if factorised is None:
+            self.K0 = self.split.stiffness(self.mesh, w, g)  # BSR, as ConstrainedSystem takes
+            self.system = ConstrainedSystem(self.K0, self.dofs)
+            self.engine = DirectSolver(self.system.A, order=self._order)
+        else:  # (its time counts in the strengths' setup)
+            self.K0, self.system, self.engine = factorised[1:]
         self._b0 = self.f - self.K0 @ self.uc  # forces minus the base's prescribed motion
         self._k0_rows = self.K0.tocsr()[self.dofs]  # the base's rows of the prescribed dofs
-        self.engine = DirectSolver(self.system.A, order=self._order)
         self.touched: set[int] = set()
         self.tris = np.zeros(0, dtype=np.int64)
         self.cols = np.zeros(0, dtype=np.int64)  # S, in the order of Z's rows

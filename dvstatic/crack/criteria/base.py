@@ -109,6 +109,8 @@ class Criterion(ABC):
         self.bonds = model.mesh.topology.bonds
         self.n_points = model.mesh.n_points
         self.h = None  # (n_bonds, 3): tension per unit xx, yy and xy stress
+        #: the undamaged system :meth:`prepare` factorised (the event loop takes it over)
+        self.factorised = None
 
     # ------------------------------------------------------------------ to override
     def set_response(self, h: np.ndarray, patches) -> None:
@@ -153,7 +155,7 @@ class Criterion(ABC):
         responses hold them)."""
         t0 = time.perf_counter()
         mesh = model.mesh
-        tens, patches = responses(model, self.length, self.area, dofs)
+        tens, patches, self.factorised = responses(model, self.length, self.area, dofs, self.sp)
         self.set_response(np.stack(tens, axis=1), patches)
         factors = None
         if weibull is not None:
@@ -212,12 +214,12 @@ class Criterion(ABC):
         sg = self.softening(xg)
         sh = 0.0 if xh is None else self.softening(xh)
         ratio, excess, mode = self.factors(xh, xg, w, g, intact, threshold)
-        ch = 0.0 if xh is None else self.cracked(xh, modes, sense, sh)
-        s_ratio, s_excess = linear_factors(ch, self.cracked(xg, modes, sense, sg), threshold)
-        cracked = d < 1.0
-        ratio = np.where(cracked, s_ratio, ratio)
-        excess = np.where(cracked, s_excess, excess)
-        mode = np.where(cracked, modes, mode)
+        c = np.flatnonzero(d < 1.0)  # cracked: by their softening measure
+        if len(c):
+            ch = 0.0 if xh is None else self.cracked(xh, modes, sense, sh)[c]
+            cg = self.cracked(xg, modes, sense, sg)[c]
+            ratio[c], excess[c] = linear_factors(ch, cg, threshold[c])
+            mode[c] = np.broadcast_to(modes, d.shape)[c]
         gone = d <= 0
         ratio[gone] = excess[gone] = 0.0
         if np.any(excess >= 1.0):

@@ -7,6 +7,7 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Mapping
+from typing import NamedTuple
 
 import numpy as np
 
@@ -18,7 +19,7 @@ from ..strength import uniform_stress_loads
 
 log = logging.getLogger(__name__)
 
-__all__ = ["positive", "per_bond", "voigt", "responses"]
+__all__ = ["positive", "per_bond", "voigt", "responses", "Factorised"]
 
 
 def positive(value, name: str) -> None:
@@ -63,16 +64,27 @@ def voigt(s: np.ndarray) -> np.ndarray:
     return np.stack([s[:, 0, 0], s[:, 1, 1], s[:, 0, 1]], axis=1)
 
 
-def _uniform_response(model, length, area, dofs=None):
+class Factorised(NamedTuple):
+    """The undamaged constrained stiffness the responses solved with, factorised (the
+    event loop starts from it when its prescribed dofs are the same)."""
+
+    dofs: np.ndarray
+    K: object  #: (2N, 2N) BSR
+    system: ConstrainedSystem
+    engine: DirectSolver
+
+
+def _uniform_response(model, length, area, dofs=None, sp_=None):
     """Tensions (3 x (n_bonds,)) and patch stresses (3 x (stress, covered)) of ``model``
     under the unit uniform stresses xx, yy, xy: boundary tractions, and at the problem's
     prescribed ``dofs`` the uniform state's displacement (so that a bond at a support
     or a grip answers as it does in the problem: the stress at a support is the
-    stress); without ``dofs``, three pinned dofs."""
+    stress); without ``dofs``, three pinned dofs. ``sp_``: the model's split stiffness,
+    if made already. Also returns the :class:`Factorised` system."""
     from ...lattice.damage import split
 
     mesh = model.mesh
-    sp_ = split(model)
+    sp_ = split(model) if sp_ is None else sp_
     w, g = sp_.factors(np.ones(mesh.n_bonds))
     x = mesh.points
     if dofs is None:
@@ -95,7 +107,7 @@ def _uniform_response(model, length, area, dofs=None):
     patches = [
         sp_.patch_stress(u, w, g, length, area, None, f) for u, f in zip(us, forces, strict=True)
     ]
-    return tens, patches
+    return tens, patches, Factorised(np.asarray(dofs), K, system, engine)
 
 
 def _unit_mean_stress(mesh, K, us, thickness):
@@ -129,15 +141,17 @@ def _unit_strains(E: float, nu: float) -> list[np.ndarray]:
     ]
 
 
-def responses(model, length, area, dofs=None):
-    """The uniform-stress response of every bond. With several materials a uniform
-    traction does not give a uniform stress, so each material's bonds take the response
-    of the mesh made entirely of that material (a bond between materials takes the one
-    of its first triangle)."""
+def responses(model, length, area, dofs=None, sp_=None):
+    """The uniform-stress response of every bond: tensions (3 x (n_bonds,)), patch
+    stresses (3 x (stress, covered)) and the :class:`Factorised` system (None with
+    several materials). With several materials a uniform traction does not give a
+    uniform stress, so each material's bonds take the response of the mesh made entirely
+    of that material (a bond between materials takes the one of its first triangle).
+    ``sp_``: the model's split stiffness, if made already."""
     import dataclasses
 
     if len(model.all_materials) == 1:
-        return _uniform_response(model, length, area, dofs)
+        return _uniform_response(model, length, area, dofs, sp_)
     from ..pieces import bond_triangles
 
     mat = model.material_of_triangle[bond_triangles(model.mesh)[:, 0]]
@@ -156,9 +170,9 @@ def responses(model, length, area, dofs=None):
             model, E=material.E, nu=material.nu, materials=None, calibration=cal
         )
         alone.share_calibration_flags(model)
-        t_k, p_k = _uniform_response(alone, length, area, dofs)
+        t_k, p_k, _ = _uniform_response(alone, length, area, dofs)
         for c in range(3):
             tens[c][sel] = t_k[c][sel]
             patches[c][0][sel] = p_k[c][0][sel]
             patches[c][1][sel] = p_k[c][1][sel]
-    return tens, patches
+    return tens, patches, None
