@@ -9,7 +9,7 @@ import pytest
 from scipy.spatial import Delaunay
 
 import dvstatic as dv
-from dvstatic.lattice.calibration import calibration_flags, classes, spread_classes
+from dvstatic.lattice.calibration import calibration_flags, classes, grading_flags, spread_classes
 from dvstatic.lattice.calibration.quality import TOLERANCE, patches
 from dvstatic.lattice.calibration.relaxed import MIXED_SPREAD, local_spread, spread_field
 
@@ -86,6 +86,52 @@ def test_a_graded_mesh_raises_no_flag():
     mesh = dv.mesh.generate(domain, dv.mesh.size_near(domain, "tunnel", 0.05, 0.5, 3.0))
     bare = dv.Mesh(mesh.points, mesh.triangles, parts=mesh.parts)  # without its recipe
     assert calibration_flags(bare, np.full(bare.n_triangles, local_spread(bare))) == ()
+
+
+@pytest.mark.parametrize("kind", ["jittered", "cvt", "random"])
+def test_uniform_meshes_of_every_kind_raise_no_grading_flag(kind):
+    """The spacing's slope on uniform meshes is noise: no region above the limit (on
+    random points the largest node value off the boundary rings reads about 0.1)."""
+    for seed in (1, 2):
+        r = dv.mesh.rectangle(2, 1, 0.015, kind=kind, seed=seed)
+        assert grading_flags(dv.Mesh(r.points, r.triangles)) == []
+
+
+def test_the_hull_of_raw_points_is_not_taken_for_a_steep_grading():
+    """A Delaunay triangulation of raw random points has slivers along its hull, whose
+    long bonds read as a spacing growing fast towards the boundary: such a boundary's
+    rings are left out (before: six regions flagged on 1e5 points)."""
+    p = np.random.default_rng(0).random((20000, 2))
+    assert grading_flags(dv.Mesh(p, Delaunay(p).simplices)) == []
+
+
+def test_an_imported_mesh_graded_too_steeply_is_named_in_a_warning(caplog):
+    """A mesh without recipe whose spacing grows by 0.15 per unit length (the tunnel's
+    grading that biased its wall's hoop stress by +5 %) is flagged, with the slope and
+    the place; the same mesh graded at 0.075 is not."""
+    from dvstatic.lattice.calibration.quality import GRADING, slope_field
+
+    tunnel = dv.domain.Circle((0, 0), 1.0, "tunnel")
+    domain = dv.domain.Domain(dv.domain.Circle((0, 0), 10.0, "boundary"), (tunnel,))
+    slopes = []
+    for distance in (3.0, 6.0):
+        mesh = dv.mesh.generate(domain, dv.mesh.size_near(domain, "tunnel", 0.05, 0.5, distance))
+        bare = dv.Mesh(mesh.points, mesh.triangles, parts=mesh.parts)  # as if imported
+        slopes.append(float(slope_field(bare).max()))
+        model = dv.DV(bare, E, NU)
+        caplog.clear()
+        with caplog.at_level(logging.WARNING, logger="dvstatic.lattice"):
+            flags = [f for f in model.calibration_flags if f.kind == "grading"]
+        if distance == 6.0:
+            assert flags == []
+            continue
+        (flag,) = flags
+        assert 0.14 < flag.spread < 0.17 and flag.calibrated == GRADING
+        x0, y0, x1, y1 = flag.box
+        assert x0 < -1 and x1 > 1 and flag.triangles > 500  # the ring around the tunnel
+        assert any("grows by up to 0.1" in r.getMessage() for r in caplog.records)
+        assert flag.as_dict()["slope"] == flag.spread
+    assert slopes[0] > 0.14 and slopes[1] < 0.11  # the size fields' 0.15 and 0.075
 
 
 def test_a_mesh_beyond_the_samples_reach_is_named_in_a_warning(caplog):

@@ -50,6 +50,7 @@ def model_flags(model) -> tuple[calibration.QualityFlag, ...]:
         defects = np.array([d["defect_fraction"] for d in details])[idx]
         flags = flags + tuple(calibration.defect_flags(model.mesh, asked[idx], defects))
     flags = flags + tuple(calibration.anisotropy_flags(model.mesh))
+    flags = flags + tuple(calibration.grading_flags(model.mesh))
     for f in flags:
         log.warning("calibration: %s", f.message())
     return flags

@@ -18,7 +18,13 @@ from .paper import (
     paper,
     paper_from_moments,
 )
-from .quality import QualityFlag, anisotropy_flags, calibration_flags, defect_flags
+from .quality import (
+    QualityFlag,
+    anisotropy_flags,
+    calibration_flags,
+    defect_flags,
+    grading_flags,
+)
 from .relaxed import (
     REV_POINTS,
     SPREAD_STEP,
@@ -53,5 +59,6 @@ __all__ = [
     "QualityFlag",
     "anisotropy_flags",
     "calibration_flags",
+    "grading_flags",
     "defect_flags",
 ]

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...mesh import Mesh
+from ...mesh.graded import MAX_GRADING
 from .descriptors import deep_nodes, ring_mean, spread_field
 
 __all__ = [
@@ -41,6 +42,8 @@ __all__ = [
     "calibration_flags",
     "anisotropy_flags",
     "defect_flags",
+    "grading_flags",
+    "slope_field",
     "patches",
     "triangle_spread",
 ]
@@ -71,6 +74,13 @@ WHOLE_SHARE = 0.9
 #: points reach 0.16 at single nodes, a square grid split by parallel diagonals is 0.25
 #: everywhere and 9 % soft along its axes)
 ANISOTROPY = 0.2
+#: a region whose mesh spacing grows faster than this (per unit length, measured as
+#: :func:`slope_field` does) is graded too steeply for the lattice to relax evenly
+#: (mesh.graded.MAX_GRADING, 0.1, with a margin for the estimate: on uniform random
+#: points it reads up to 0.099, on gmsh meshes graded at 0.1 up to 0.105)
+GRADING = 1.25 * MAX_GRADING
+#: rings over which the node spacing, then its gradient, are averaged
+GRADING_RINGS = 6
 #: a calibration whose defect fraction exceeds the CVT family's at its local spread by
 #: more than this is of cells no sample family has (CVT-like meshes lie within 0.05
 #: of the family, random points on it)
@@ -83,10 +93,10 @@ class QualityFlag:
 
     Attributes
     ----------
-    kind : {"patch", "reach", "defects", "anisotropy"}
+    kind : {"patch", "reach", "defects", "anisotropy", "grading"}
         A region of another local spread, a spread beyond the samples', a defect
-        fraction beyond the samples' (cells of no sample family), or an anisotropic
-        fabric.
+        fraction beyond the samples' (cells of no sample family), an anisotropic
+        fabric, or a spacing that grows too fast.
     where : str
         ``"region 'name'"``, ``"the whole mesh"``, ``"class k"`` or
         ``"triangles around (x, y)"``.
@@ -100,7 +110,8 @@ class QualityFlag:
         The local spread its calibration was measured at: its sample's (``"patch"``
         in a mesh calibrated as one: the mesh's, which its sample matches to 1 %
         unless the whole mesh is beyond reach); ``"defects"``: the CVT family's defect
-        fraction at its local spread.
+        fraction at its local spread. ``"grading"``: ``spread`` is the largest slope
+        of the spacing in the region, ``calibrated`` the limit (:data:`GRADING`).
     box : tuple of float
         Its bounding box ``(x_min, y_min, x_max, y_max)`` (mesh units).
     """
@@ -116,6 +127,15 @@ class QualityFlag:
         """The warning's text."""
         x0, y0, x1, y1 = self.box
         box = f"[{x0:.3g}, {x1:.3g}] x [{y0:.3g}, {y1:.3g}]"
+        if self.kind == "grading":
+            return (
+                f"{self.where} ({self.triangles} triangles, {box}): the mesh spacing grows "
+                f"by up to {self.spread:.2f} per unit length, more than {MAX_GRADING:g} "
+                f"(measured over {GRADING_RINGS} rings): the lattice relaxes unevenly across "
+                "so steep a grading and the stresses near its fine side can be biased by "
+                "several % (a tunnel wall graded at 0.16: +5 % hoop stress); remesh with "
+                "the spacing growing more slowly"
+            )
         if self.kind == "anisotropy":
             return (
                 f"{self.where} ({self.triangles} triangles, {box}): the fabric of its bonds "
@@ -153,11 +173,7 @@ class QualityFlag:
             "kind": self.kind,
             "where": self.where,
             "triangles": self.triangles,
-            **(
-                {"defect_fraction": self.spread, "family_defect_fraction": self.calibrated}
-                if self.kind == "defects"
-                else {"local_spread": self.spread, "calibrated_spread": self.calibrated}
-            ),
+            **_values(self),
             "box": list(self.box),
         }
 
@@ -312,6 +328,108 @@ def defect_flags(mesh: Mesh, spread: np.ndarray, defects: np.ndarray) -> list[Qu
             QualityFlag("defects", where, len(tris), float(d), float(limit), _box(mesh, tris))
         )
     return flags
+
+
+def slope_field(mesh: Mesh) -> np.ndarray:
+    """How fast the mesh spacing grows around every triangle, shape (M,) (length per
+    length): the node spacing (the mean length of a node's bonds) averaged over
+    :data:`GRADING_RINGS` rings, its gradient on every triangle, area-weighted at the
+    nodes and averaged over as many rings again, and the gradient's length. It reads
+    0.15 / 0.093 on CVT meshes of the package graded at 0.15 / 0.075, 0.10 / 0.08 /
+    0.18 on gmsh meshes graded at 0.1 / 0.075 / 0.2, at most 0.06 on uniform CVT
+    meshes and 0.099 on uniform random points (largest node values)."""
+    n, p, t = mesh.n_points, mesh.points, mesh.triangles
+    h = ring_mean(mesh, _median_bond(mesh), GRADING_RINGS)
+    x = p[t]
+    edges = [x[:, 2] - x[:, 1], x[:, 0] - x[:, 2], x[:, 1] - x[:, 0]]  # opposite each node
+    twice = edges[2][:, 0] * edges[1][:, 1] - edges[2][:, 1] * edges[1][:, 0]  # -2 A
+    grad = sum(h[t[:, k], None] * np.c_[-e[:, 1], e[:, 0]] for k, e in enumerate(edges))
+    grad = grad / -twice[:, None]
+    area = np.repeat(np.abs(twice), 3)
+    weight = np.maximum(np.bincount(t.ravel(), area, n), 1e-300)
+    node = [
+        ring_mean(
+            mesh, np.bincount(t.ravel(), area * np.repeat(grad[:, c], 3), n) / weight, GRADING_RINGS
+        )
+        for c in range(2)
+    ]
+    return np.hypot(*node)[t].mean(axis=1)
+
+
+#: a boundary is taken for the convex hull of raw points (a Delaunay triangulation
+#: without a mesher's boundary) where more than this share of its triangles has an
+#: angle below :data:`SLIVER_ANGLE` degrees (a mesher's graded boundaries: none)
+HULL_SLIVERS = 0.1
+SLIVER_ANGLE = 10.0
+
+
+def _raw_hull(mesh: Mesh) -> bool:
+    """Whether ``mesh``'s boundary looks like the hull of raw points (slivers)."""
+    bt = mesh.topology.bond_tris
+    tris = bt[bt[:, 1] < 0, 0]  # a triangle at every boundary bond
+    x = mesh.points[mesh.triangles[tris]]  # (k, 3, 2)
+    e = np.roll(x, -1, axis=1) - x  # the three edges
+    ln = np.linalg.norm(e, axis=2)
+    cos = -np.sum(e * np.roll(e, 1, axis=1), axis=2) / (ln * np.roll(ln, 1, axis=1))
+    smallest = np.degrees(np.arccos(np.clip(cos, -1, 1))).min(axis=1)
+    return bool(np.mean(smallest < SLIVER_ANGLE) > HULL_SLIVERS)
+
+
+def _median_bond(mesh: Mesh) -> np.ndarray:
+    """The median length of every node's bonds, shape (N,) (a hull's long slivers
+    leave it alone)."""
+    b, p = mesh.topology.bonds, mesh.points
+    length = np.hypot(*(p[b[:, 1]] - p[b[:, 0]]).T)
+    node, value = b.ravel(), np.repeat(length, 2)
+    order = np.lexsort((value, node))
+    node, value = node[order], value[order]
+    count = np.bincount(node, None, mesh.n_points).astype(np.int64)
+    start = np.r_[0, np.cumsum(count)[:-1]]
+    lo, hi = start + (count - 1) // 2, start + count // 2
+    out = np.zeros(mesh.n_points)
+    has = count > 0
+    out[has] = 0.5 * (value[lo[has]] + value[hi[has]])
+    return out
+
+
+def grading_flags(mesh: Mesh) -> list[QualityFlag]:
+    """The regions of ``mesh`` whose spacing grows faster than :data:`GRADING`
+    (:func:`slope_field`; edge-connected, at least :data:`MIN_TRIANGLES` triangles, more
+    than two rings from the boundary, or :data:`BOUNDARY_RINGS` rings where the boundary
+    is the hull of raw points, whose slivers read as steep grading), largest first."""
+    slope = slope_field(mesh)
+    rings = BOUNDARY_RINGS if _raw_hull(mesh) else 2
+    inner = deep_nodes(mesh, rings)[mesh.triangles].all(axis=1)
+    return [
+        QualityFlag(
+            "grading",
+            _steepest(mesh, tris, slope),
+            len(tris),
+            float(slope[tris].max()),
+            GRADING,
+            _box(mesh, tris),
+        )
+        for tris in _clusters(mesh, (slope > GRADING) & inner)
+    ]
+
+
+def _steepest(mesh: Mesh, tris: np.ndarray, slope: np.ndarray) -> str:
+    """A graded region's name, or its steepest place (a ring of graded cells around a
+    hole has its centroid in the hole)."""
+    where = _where(mesh, tris)
+    if where.startswith("region"):
+        return where
+    x, y = mesh.points[mesh.triangles[tris[np.argmax(slope[tris])]]].mean(axis=0)
+    return f"the cells around ({x:.3g}, {y:.3g})"
+
+
+def _values(flag: QualityFlag) -> dict:
+    """The flag's two numbers under their names for the JSON."""
+    if flag.kind == "defects":
+        return {"defect_fraction": flag.spread, "family_defect_fraction": flag.calibrated}
+    if flag.kind == "grading":
+        return {"slope": flag.spread, "limit": flag.calibrated}
+    return {"local_spread": flag.spread, "calibrated_spread": flag.calibrated}
 
 
 def _near_boundary(mesh: Mesh) -> np.ndarray:
