@@ -772,3 +772,31 @@ def test_fracture_breaks_the_plain_lattice_at_the_boundary():
     np.testing.assert_allclose(
         [e.load_factor for e in res.events], [e.load_factor for e in plain.events], rtol=1e-12
     )
+
+
+def test_the_responses_factorisation_starts_the_loop_or_is_freed_before_it(monkeypatch):
+    """An undamaged run starts from the factorisation its criterion's uniform-stress
+    responses made (no second one); a resumed run (start=) needs its own, and the
+    responses' is freed before it is made (two factorisations alive at once would
+    double the peak memory at 1e6 nodes)."""
+    import gc
+
+    from dvstatic.crack import updates
+    from dvstatic.linalg import DirectSolver
+
+    alive = []
+    original = updates.UpdatedSolver.rebase
+
+    def rebase(self, w, g, factorised=None):
+        if factorised is None and not hasattr(self, "engine"):  # the run's first
+            gc.collect()
+            alive.append(sum(isinstance(o, DirectSolver) for o in gc.get_objects()))
+        return original(self, w, g, factorised)
+
+    monkeypatch.setattr(updates.UpdatedSolver, "rebase", rebase)
+    model = dv.DV(plate(0.1), E=E, nu=NU)
+    sup, loads = pulled()
+    first = dv.fracture(model, sup, loads, ft=FT, max_events=3)
+    assert alive == []  # its first base was the responses'
+    again = dv.fracture(model, sup, loads, ft=FT, max_events=3, start=first)
+    assert alive == [0] and len(again.events) == 3

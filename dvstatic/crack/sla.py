@@ -376,8 +376,9 @@ class _Analysis(EventSearch):
         # the criterion's responses factorised the undamaged system: start from it when
         # the run starts undamaged with the same prescribed dofs (and let it go after)
         fac, self.criterion.factorised = self.criterion.factorised, None
-        same = fac is not None and self.initial is None and np.array_equal(fac.dofs, self.dofs)
-        self.solver.rebase(*self.factors(), fac if same else None)
+        if not (fac is not None and self.initial is None and np.array_equal(fac.dofs, self.dofs)):
+            fac = None  # (freed before the new factorisation is made)
+        self.solver.rebase(*self.factors(), fac)
         self._solve()
         self.x_last = self.x
         self.k_initial = self.p_ref / self.u_ref

@@ -23,11 +23,15 @@ from __future__ import annotations
 
 import logging
 import time
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..linalg import ConstrainedSystem, DirectSolver
 from ..mesh import mesh_dof_order
+
+if TYPE_CHECKING:
+    from .criteria.responses import Factorised
 
 log = logging.getLogger(__name__)
 
@@ -72,10 +76,10 @@ class UpdatedSolver:
         self._order = mesh_dof_order(mesh)
 
     # ------------------------------------------------------------ base
-    def rebase(self, w: np.ndarray, g: np.ndarray, factorised=None) -> None:
-        """Factorise the stiffness of ``w, g`` and make it the base; ``factorised``
-        (:class:`~dvstatic.crack.criteria.responses.Factorised`): that stiffness with the
-        same prescribed dofs, factorised already."""
+    def rebase(self, w: np.ndarray, g: np.ndarray, factorised: Factorised | None = None):
+        """Make the stiffness of ``w, g`` the base: factorise it, or take ``factorised``,
+        that stiffness with the same prescribed dofs factorised already (the criterion's
+        uniform-stress responses solved with it)."""
         t0 = time.perf_counter()
         self.w0, self.g0 = w.copy(), g.copy()
         if factorised is None:
@@ -93,7 +97,8 @@ class UpdatedSolver:
         self._w = None  # W for the current S (kept until S grows)
         self._y0: dict[str, tuple] = {}  # A0^-1 b for each unchanged right-hand side
         self.floor = 0.0  # the residual a direct solve reached where it missed tol
-        self.factorisations += 1
+        self.stale = False  # a touch passed max_rank: the next solve factorises afresh
+        self.factorisations += 1  # (an adopted factorisation counts: the run's first)
         self.factor_seconds += time.perf_counter() - t0
 
     @property
@@ -106,7 +111,9 @@ class UpdatedSolver:
         return bool(len(self.tris))
 
     def touch(self, tris: np.ndarray) -> None:
-        """Make triangles ``tris`` part of the update (new rows of Z for their new dofs)."""
+        """Make triangles ``tris`` part of the update (new rows of Z for their new dofs).
+        Where the update would pass ``max_rank`` columns, nothing is solved: the next
+        :meth:`solve` factorises the current matrix afresh."""
         new = np.array([t for t in np.unique(tris) if int(t) not in self.touched], dtype=np.int64)
         if new.size == 0:
             return
@@ -117,8 +124,11 @@ class UpdatedSolver:
         if d.size == 0:
             return
         r_old, r = self.rank, self.rank + len(d)
-        if r > len(self._zt):  # the buffer doubles, up to max_rank + 12 rows
-            zt = np.empty((max(r, min(2 * len(self._zt), self.max_rank + 12), 48), len(self.free)))
+        if r > self.max_rank:
+            self.stale = True
+            return
+        if r > len(self._zt):  # the buffer doubles, up to max_rank rows
+            zt = np.empty((max(r, min(2 * len(self._zt), self.max_rank), 48), len(self.free)))
             zt[:r_old] = self._zt[:r_old]
             self._zt = zt
         e = np.zeros((len(self.free), len(d)))
@@ -213,7 +223,7 @@ class UpdatedSolver:
         later updates are held to :data:`FLOOR_FACTOR` times it (at most
         :data:`FLOOR_CAP`) instead of refactorising at every solve.
         """
-        if self.rank > self.max_rank:
+        if self.stale:
             self.rebase(w, g)
         x, res = self._refined(w, g, tol, f)
         if res > max(tol, min(FLOOR_FACTOR * self.floor, FLOOR_CAP)) and self.rank:

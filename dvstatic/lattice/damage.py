@@ -146,16 +146,11 @@ class TriangleSplit:
             shape=(e, self.n_nodes),
         )
 
-    @cached_property
-    def patch_sum(self):
-        """(n_bonds, M) CSR: how many of a bond's two end nodes each triangle has (its
-        patch, the triangles at either end, counted as the nodes' sums are)."""
-        return (self._bond_ends @ self._at_node).tocsr()
-
     def patch_total(self, values: np.ndarray) -> np.ndarray:
-        """``patch_sum @ values`` (n_bonds, k) for per-triangle ``values`` (M, k), as the
-        nodes' sums of their triangles summed over each bond's two ends (a third of the
-        work of the bond-by-triangle product)."""
+        """Every bond's sum of per-triangle ``values`` (M,) or (M, k) over its patch, the
+        triangles at either end node (a triangle at both ends counted twice), shape
+        (n_bonds,) or (n_bonds, k): the nodes' sums of their triangles summed over each
+        bond's two ends (a third of the work of one bond-by-triangle product)."""
         return self._bond_ends @ (self._at_node @ values)
 
     def tension(self, u: np.ndarray, w: np.ndarray, g: np.ndarray, forces=None) -> np.ndarray:
