@@ -787,16 +787,21 @@ def test_the_responses_factorisation_starts_the_loop_or_is_freed_before_it(monke
     alive = []
     original = updates.UpdatedSolver.rebase
 
+    adopted = []
+
     def rebase(self, w, g, factorised=None):
-        if factorised is None and not hasattr(self, "engine"):  # the run's first
+        first = not hasattr(self, "engine")
+        if factorised is None and first:
             gc.collect()
             alive.append(sum(isinstance(o, DirectSolver) for o in gc.get_objects()))
-        return original(self, w, g, factorised)
+        original(self, w, g, factorised)
+        if first and factorised is not None:
+            adopted.append(self.engine is factorised.engine)
 
     monkeypatch.setattr(updates.UpdatedSolver, "rebase", rebase)
     model = dv.DV(plate(0.1), E=E, nu=NU)
     sup, loads = pulled()
     first = dv.fracture(model, sup, loads, ft=FT, max_events=3)
-    assert alive == []  # its first base was the responses'
+    assert alive == [] and adopted == [True]  # its first base was the responses'
     again = dv.fracture(model, sup, loads, ft=FT, max_events=3, start=first)
     assert alive == [0] and len(again.events) == 3

@@ -82,6 +82,9 @@ class UpdatedSolver:
         uniform-stress responses solved with it)."""
         t0 = time.perf_counter()
         self.w0, self.g0 = w.copy(), g.copy()
+        if factorised is not None and not _undamaged(self.split, w, g, factorised, self.dofs):
+            log.debug("the given factorisation is not of this stiffness: factorising afresh")
+            factorised = None
         if factorised is None:
             self.K0 = self.split.stiffness(self.mesh, w, g)  # BSR, as ConstrainedSystem takes
             self.system = ConstrainedSystem(self.K0, self.dofs)
@@ -252,3 +255,13 @@ class UpdatedSolver:
                 break
             x = x + self._woodbury(r, w, g)
         return x, res
+
+
+def _undamaged(split, w, g, factorised, dofs) -> bool:
+    """Whether ``factorised`` (made from the undamaged split with prescribed ``dofs``)
+    is the stiffness of ``w, g``."""
+    return (
+        np.array_equal(factorised.dofs, dofs)
+        and np.array_equal(w, split.w)
+        and np.array_equal(g, split.g)
+    )
