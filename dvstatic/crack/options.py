@@ -65,7 +65,7 @@ class FractureOptions:
     )
     max_rank: int = option(
         240,
-        f"largest low-rank update (columns, two per node of the damaged triangles, 0 to "
+        f"largest low-rank update (columns, one per bond of the damaged triangles, 0 to "
         f"{MAX_RANK}) before the stiffness is factorised afresh (0: refactorise at every "
         "event, the reference path)",
         "int",

@@ -1,22 +1,24 @@
 """Solving with a damaged stiffness: one factorisation, low-rank updates on top of it.
 
 Damage changes the 3x3 bond matrices ``Q_T`` of a few triangles per event, so the
-constrained stiffness changes only in the rows and columns of those triangles' free
-dofs ``S``: ``A = A0 + E_S C E_S^T``, ``A0`` the factorised base, ``E_S`` the unit
-columns of ``S`` and ``C`` (``|S| x |S|``) the sum of the changed triangles'
-``B_T^T (Q_T - Q_T^0) B_T``. The Woodbury identity in its capacitance form (no inverse
-of ``C`` needed, so a broken bond's rank-deficient change is fine)::
+constrained stiffness is ``A = A0 + U C U^T``: ``A0`` the factorised base, ``U`` the
+elongation gradients of the distinct bonds of the changed triangles (a column per
+bond, constrained rows zeroed) and ``C`` (bonds x bonds) the sum of the triangles'
+``Q_T - Q_T^0`` on their bonds. The Woodbury identity in its capacitance form (no
+inverse of ``C`` needed, so a broken bond's rank-deficient change is fine)::
 
-    A^-1 b = y - Z (I + C W)^-1 C y_S,   y = A0^-1 b,  Z = A0^-1 E_S,  W = Z_S.
+    A^-1 b = y - Z (I + C W)^-1 C U^T y,   y = A0^-1 b,  Z = A0^-1 U,  W = U^T Z.
 
-``Z`` gets two columns for every node a touched triangle brings into ``S`` (one
-multi-right-hand-side triangular solve): along a crack path that is one node, two
-columns, per new triangle (three columns per triangle when the columns were the
-triangles' bond elongations); later teeth of the same triangle only change ``C``.
-``Z`` is kept transposed (a row per dof of ``S``), so a new column is written where it
-lies. Once ``|S|`` passes ``max_rank`` the current matrix is factorised afresh and
-becomes the base. Every solution is checked against the current matrix and refined (up
-to three steps) until its relative residual is below ``tol``.
+``Z`` gets a column for every bond a touched triangle brings in (one
+multi-right-hand-side triangular solve): along a crack path two per new triangle, where
+the triangles' own three bond columns took three, and each column a bond's dipole
+(columns of unit dofs, two per new node, are as few but are the Green's functions of
+point forces, whose far fields cancel in the correction: their solutions' residuals
+came out 10-100 times larger); later teeth of the same triangle only change ``C``.
+``Z`` is kept transposed (a row per bond), so a new column is written where it lies.
+Once the update passes ``max_rank`` columns the current matrix is factorised afresh
+and becomes the base. Every solution is checked against the current matrix and refined
+(up to three steps) until its relative residual is below ``tol``.
 """
 
 from __future__ import annotations
@@ -95,9 +97,9 @@ class UpdatedSolver:
         self._k0_rows = self.K0.tocsr()[self.dofs]  # the base's rows of the prescribed dofs
         self.touched: set[int] = set()
         self.tris = np.zeros(0, dtype=np.int64)
-        self.cols = np.zeros(0, dtype=np.int64)  # S, in the order of Z's rows
-        self.pos = np.full(len(self.free), -1, dtype=np.int64)  # dof -> row of Z (or -1)
-        self._w = None  # W for the current S (kept until S grows)
+        self.bonds = np.zeros(0, dtype=np.int64)  # the update's bonds, Z's rows
+        self.pos = np.full(self.split.n_bonds, -1, dtype=np.int64)  # bond -> row (or -1)
+        self._u = None  # U, (2N, rank) CSC
         self._y0: dict[str, tuple] = {}  # A0^-1 b for each unchanged right-hand side
         self.floor = 0.0  # the residual a direct solve reached where it missed tol
         self.stale = False  # a touch passed max_rank: the next solve factorises afresh
@@ -106,7 +108,7 @@ class UpdatedSolver:
 
     @property
     def rank(self) -> int:
-        return len(self.cols)
+        return len(self.bonds)
 
     @property
     def changed(self) -> bool:
@@ -114,45 +116,67 @@ class UpdatedSolver:
         return bool(len(self.tris))
 
     def touch(self, tris: np.ndarray) -> None:
-        """Make triangles ``tris`` part of the update (new rows of Z for their new dofs).
-        Where the update would pass ``max_rank`` columns, nothing is solved: the next
-        :meth:`solve` factorises the current matrix afresh."""
+        """Make triangles ``tris`` part of the update (new columns of Z for their new
+        bonds). Where the update would pass ``max_rank`` columns, nothing is solved: the
+        next :meth:`solve` factorises the current matrix afresh."""
         new = np.array([t for t in np.unique(tris) if int(t) not in self.touched], dtype=np.int64)
         if new.size == 0:
             return
         self.touched.update(int(t) for t in new)
         self.tris = np.concatenate([self.tris, new])
-        d = np.unique(self.split.dofs[new].ravel())
-        d = d[self.free[d] & (self.pos[d] < 0)]
-        if d.size == 0:
+        bonds, first = np.unique(self.split.tri_bonds[new].ravel(), return_index=True)
+        fresh = self.pos[bonds] < 0
+        bonds, first = bonds[fresh], first[fresh]
+        if bonds.size == 0:
             return
-        r_old, r = self.rank, self.rank + len(d)
+        r_old, r = self.rank, self.rank + len(bonds)
         if r > self.max_rank:
             self.stale = True
             return
-        if r > len(self._zt):  # the buffer doubles, up to max_rank rows
-            zt = np.empty((max(r, min(2 * len(self._zt), self.max_rank), 48), len(self.free)))
+        self._grow(r)
+        u_new = self._columns(new[first // 3], first % 3)
+        zn = self.engine.apply(u_new.toarray())
+        self.columns_solved += len(bonds)
+        u_all = u_new if self._u is None else _hstack(self._u, u_new)
+        wn = u_all.T @ zn  # (r, new): W is symmetric as A0 is
+        self._zt[r_old:r] = zn.T
+        self._wb[:r, r_old:r] = wn
+        self._wb[r_old:r, :r_old] = wn[:r_old].T
+        self._u = u_all
+        self.pos[bonds] = np.arange(r_old, r)
+        self.bonds = np.concatenate([self.bonds, bonds])
+
+    def _grow(self, r: int) -> None:
+        """Room for ``r`` columns (the buffers double, up to ``max_rank``)."""
+        if r > len(self._zt):
+            cap = max(r, min(2 * len(self._zt), self.max_rank), 48)
+            zt = np.empty((cap, len(self.free)))
+            wb = np.empty((cap, cap))
+            r_old = self.rank
             zt[:r_old] = self._zt[:r_old]
-            self._zt = zt
-        e = np.zeros((len(self.free), len(d)))
-        e[d, np.arange(len(d))] = 1.0
-        self._zt[r_old:r] = self.engine.apply(e).T
-        self.columns_solved += len(d)
-        self.pos[d] = np.arange(r_old, r)
-        self.cols = np.concatenate([self.cols, d])
-        self._w = None
+            if r_old:
+                wb[:r_old, :r_old] = self._wb[:r_old, :r_old]
+            self._zt, self._wb = zt, wb
+
+    def _columns(self, tri: np.ndarray, k: np.ndarray):
+        """U's columns (2N, len(tri)) CSC: the elongation gradients of the local edges
+        ``k`` of triangles ``tri``, constrained rows 0."""
+        import scipy.sparse as sp
+
+        dofs = self.split.dofs[tri]  # (n, 6)
+        vals = self.split.b[tri, k] * self.free[dofs]
+        cols = np.repeat(np.arange(len(tri)), 6)
+        return sp.csc_matrix((vals.ravel(), (dofs.ravel(), cols)), shape=(len(self.free), len(tri)))
 
     @property
     def Z(self) -> np.ndarray:
-        """``A0^-1 E_S`` (2N, rank), a view of the transposed buffer."""
+        """``A0^-1 U`` (2N, rank), a view of the transposed buffer."""
         return self._zt[: self.rank].T
 
     @property
     def W(self) -> np.ndarray:
-        """``Z_S`` (rank, rank): the base's inverse on the touched dofs."""
-        if self._w is None:
-            self._w = self._zt[: self.rank][:, self.cols]
-        return self._w
+        """``U^T A0^-1 U`` (rank, rank)."""
+        return self._wb[: self.rank, : self.rank]
 
     # ------------------------------------------------------------ solve
     def _dq(self, w, g) -> np.ndarray:
@@ -161,20 +185,17 @@ class UpdatedSolver:
         return self.split.q(w, g, t) - self.split.q(self.w0, self.g0, t)
 
     def _capacitance(self, w, g) -> np.ndarray:
-        """``C`` (rank, rank): the touched triangles' change of stiffness on ``S``."""
-        sp_, t = self.split, self.tris
-        ke = np.einsum("tki,tkl,tlj->tij", sp_.b[t], self._dq(w, g), sp_.b[t])  # (t, 6, 6)
-        p = self.pos[sp_.dofs[t]]  # (t, 6), -1 at constrained dofs
-        keep = (p[:, :, None] >= 0) & (p[:, None, :] >= 0)
+        """``C`` (rank, rank): the touched triangles' ``Q_T - Q_T^0`` on their bonds."""
+        p = self.pos[self.split.tri_bonds[self.tris]]  # (t, 3), every bond in the update
         r = self.rank
-        flat = (p[:, :, None] * r + p[:, None, :])[keep]
-        return np.bincount(flat, ke[keep], r * r).reshape(r, r)
+        flat = (p[:, :, None] * r + p[:, None, :]).ravel()
+        return np.bincount(flat, self._dq(w, g).ravel(), r * r).reshape(r, r)
 
     def apply_matrix(self, x: np.ndarray, w, g) -> np.ndarray:
         """The current constrained matrix times ``x``."""
         y = self.system.A @ x
         if self.rank:
-            y[self.cols] += self._capacitance(w, g) @ x[self.cols]
+            y = y + self._u @ (self._capacitance(w, g) @ (self._u.T @ x))
         return y
 
     def delta_full(self, x: np.ndarray, w, g) -> np.ndarray:
@@ -211,7 +232,7 @@ class UpdatedSolver:
             return y
         c = self._capacitance(w, g)
         small = np.eye(self.rank) + c @ self.W
-        return y - self.Z @ np.linalg.solve(small, c @ y[self.cols])
+        return y - self.Z @ np.linalg.solve(small, c @ (self._u.T @ y))
 
     def solve(self, w, g, tol: float = 1e-10, f=None):
         """Displacement (2N,) per unit load factor and its relative residual; with ``f``
@@ -255,6 +276,13 @@ class UpdatedSolver:
                 break
             x = x + self._woodbury(r, w, g)
         return x, res
+
+
+def _hstack(a, b):
+    """Two CSC matrices side by side."""
+    import scipy.sparse as sp
+
+    return sp.hstack([a, b], format="csc")
 
 
 def _undamaged(split, w, g, factorised, dofs) -> bool:
