@@ -110,8 +110,7 @@ class EventSearch:
         """The criterion's next event under ``held + lambda x`` (``held`` default: the
         held loads' state)."""
         bonds = self.bonds
-        w, g = self.factors()
-        intact = self.intact()
+        (w, g), intact = self._damage_state()
         held = self.xh if held is None else held
         return self.criterion.critical(
             held, self.x, w, g, intact, bonds.d, bonds.threshold, bonds.sense, bonds.mode

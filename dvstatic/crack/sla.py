@@ -298,7 +298,6 @@ class _Analysis(EventSearch):
         self.spring = np.bincount(sp_.tri_bonds.ravel(), sp_.w.ravel(), sp_.n_bonds)
         self.initial = None
         self._factors = None
-        self._intact = None
         self.snaps = Kept(opts.snapshots, opts.snapshot_every)
         self.events: list[Event] = []
         self.broken: list[int] = []
@@ -342,42 +341,34 @@ class _Analysis(EventSearch):
         """The damaged stiffness's factors ``(w, g)``, closed cracks with their spring
         (kept while the damage and the contact status stay the same; read only). Only
         the triangles of bonds whose factor or status changed are recomputed."""
+        return self._damage_state()[0]
+
+    def _damage_state(self):
+        """``((w, g), intact)`` of the current damage and contact status (intact: 1.0 for
+        a triangle none of whose bonds is damaged, (M,)), updated on the triangles of the
+        bonds that changed since the last call."""
         d, closed = self.bonds.d, self.contact.closed
-        memo = self._factors
+        memo, tb = self._factors, self.sp.tri_bonds
         if memo is None:
-            wg = self.sp.factors(d, closed if closed.any() else None)
+            tris = slice(None)
+            w, g, intact = np.empty_like(self.sp.w), np.empty_like(self.sp.g), np.empty(len(tb))
         else:
             moved = np.flatnonzero((memo[0] != d) | (memo[1] != closed))
             if not len(moved):
                 return memo[2]
             tris = np.unique(self.bond_tris[moved])
-            wg = (memo[2][0].copy(), memo[2][1].copy())
-            wg[0][tris], wg[1][tris] = self.sp.factors(d, closed if closed.any() else None, tris)
-        self._factors = (d.copy(), closed.copy(), wg)
-        return wg
-
-    def intact(self) -> np.ndarray:
-        """1.0 for every triangle none of whose bonds is damaged, else 0.0, (M,)."""
-        d = self.bonds.d
-        memo = self._intact
-        if memo is None:
-            out = np.all(d[self.sp.tri_bonds] >= 1.0, axis=1).astype(float)
-        else:
-            moved = np.flatnonzero(memo[0] != d)
-            if not len(moved):
-                return memo[1]
-            tris = np.unique(self.bond_tris[moved])
-            out = memo[1].copy()
-            out[tris] = np.all(d[self.sp.tri_bonds[tris]] >= 1.0, axis=1)
-        self._intact = (d.copy(), out)
-        return out
+            (w, g), intact = (a.copy() for a in memo[2][0]), memo[2][1].copy()
+        w[tris], g[tris] = self.sp.factors(d, closed if closed.any() else None, tris)
+        intact[tris] = np.all(d[tb[tris]] >= 1.0, axis=1)
+        self._factors = (d.copy(), closed.copy(), ((w, g), intact))
+        return self._factors[2]
 
     def start(self) -> None:
-        # the criterion's responses factorised the undamaged system: start from it when
-        # the run starts undamaged with the same prescribed dofs (and let it go after)
+        # from the undamaged system the criterion's responses factorised, if this run
+        # starts undamaged (else that one is freed before the new one is made)
         fac, self.criterion.factorised = self.criterion.factorised, None
-        if not (fac is not None and self.initial is None and np.array_equal(fac.dofs, self.dofs)):
-            fac = None  # (freed before the new factorisation is made)
+        if self.initial is not None:
+            fac = None
         self.solver.rebase(*self.factors(), fac)
         self._solve()
         self.x_last = self.x

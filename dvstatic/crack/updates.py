@@ -119,6 +119,8 @@ class UpdatedSolver:
         """Make triangles ``tris`` part of the update (new columns of Z for their new
         bonds). Where the update would pass ``max_rank`` columns, nothing is solved: the
         next :meth:`solve` factorises the current matrix afresh."""
+        import scipy.sparse as sp
+
         new = np.array([t for t in np.unique(tris) if int(t) not in self.touched], dtype=np.int64)
         if new.size == 0:
             return
@@ -137,7 +139,7 @@ class UpdatedSolver:
         u_new = self._columns(new[first // 3], first % 3)
         zn = self.engine.apply(u_new.toarray())
         self.columns_solved += len(bonds)
-        u_all = u_new if self._u is None else _hstack(self._u, u_new)
+        u_all = u_new if self._u is None else sp.hstack([self._u, u_new], format="csc")
         wn = u_all.T @ zn  # (r, new): W is symmetric as A0 is
         self._zt[r_old:r] = zn.T
         self._wb[:r, r_old:r] = wn
@@ -276,13 +278,6 @@ class UpdatedSolver:
                 break
             x = x + self._woodbury(r, w, g)
         return x, res
-
-
-def _hstack(a, b):
-    """Two CSC matrices side by side."""
-    import scipy.sparse as sp
-
-    return sp.hstack([a, b], format="csc")
 
 
 def _undamaged(split, w, g, factorised, dofs) -> bool:

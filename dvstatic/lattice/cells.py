@@ -54,10 +54,8 @@ def boundary_triangles(mesh: Mesh) -> np.ndarray:
         return np.zeros(0, dtype=np.int64)
     on = np.zeros(mesh.n_points, dtype=bool)
     on[mesh.boundary_nodes] = True
-    g = _geometry.of(mesh)
-    length = g.tri_l
-    sine = 2.0 * g.tri_area[:, None] / (length * np.roll(length, 1, axis=1))
-    return np.flatnonzero(on[mesh.triangles].any(axis=1) & (sine.min(axis=1) >= CELL_SINE))
+    sine = _geometry.smallest_sine(_geometry.of(mesh))
+    return np.flatnonzero(on[mesh.triangles].any(axis=1) & (sine >= CELL_SINE))
 
 
 def isotropic_tensor(E: float, nu: float) -> np.ndarray:

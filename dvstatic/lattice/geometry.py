@@ -25,7 +25,7 @@ from .kinematics import edge_frames
 
 log = logging.getLogger(__name__)
 
-__all__ = ["Geometry", "of", "is_cached"]
+__all__ = ["Geometry", "of", "is_cached", "smallest_sine"]
 
 #: a half side larger than this many times its bond flags a near-degenerate triangle
 SLIVER_WARNING = 1e3
@@ -80,6 +80,13 @@ def of(mesh: Mesh) -> Geometry:
     if not isinstance(mesh, Mesh):
         raise TypeError(f"expected a dvstatic Mesh, got {type(mesh).__name__}")
     return _GEOMETRY(mesh)
+
+
+def smallest_sine(g: Geometry, sl=slice(None)) -> np.ndarray:
+    """The sine of every triangle's smallest angle (of triangles ``sl``), ``2 A / (l_i
+    l_j)`` over its corners, shape (m,)."""
+    length = g.tri_l[sl]
+    return (2.0 * g.tri_area[sl, None] / (length * np.roll(length, 1, axis=1))).min(axis=1)
 
 
 def _compute(mesh: Mesh) -> Geometry:

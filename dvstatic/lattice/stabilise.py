@@ -137,9 +137,7 @@ def reference_matrices(g, barycentric: bool, sl: slice = slice(None)) -> np.ndar
 def flat_triangles(g, sl: slice = slice(None)) -> np.ndarray:
     """Indices (within ``sl``) of the near-flat triangles of a :class:`Geometry`: the
     sine of their smallest angle is below :data:`FLAT_SINE`."""
-    length, area = g.tri_l[sl], g.tri_area[sl]
-    sine = 2.0 * area[:, None] / (length * np.roll(length, 1, axis=1))
-    return np.flatnonzero(sine.min(axis=1) < FLAT_SINE)
+    return np.flatnonzero(_geometry.smallest_sine(g, sl) < FLAT_SINE)
 
 
 def _rv_matrices(r: np.ndarray, length: np.ndarray, area: np.ndarray) -> np.ndarray:

@@ -29,6 +29,7 @@ import numpy as np
 
 from ...mesh import Mesh
 from ...mesh.graded import MAX_GRADING
+from .. import geometry as _geometry
 from .descriptors import deep_nodes, ring_mean, spread_field
 
 __all__ = [
@@ -332,12 +333,13 @@ def defect_flags(mesh: Mesh, spread: np.ndarray, defects: np.ndarray) -> list[Qu
 
 def slope_field(mesh: Mesh) -> np.ndarray:
     """How fast the mesh spacing grows around every triangle, shape (M,) (length per
-    length): the node spacing (the mean length of a node's bonds) averaged over
+    length): the node spacing (the median length of a node's bonds) averaged over
     :data:`GRADING_RINGS` rings, its gradient on every triangle, area-weighted at the
     nodes and averaged over as many rings again, and the gradient's length. It reads
-    0.15 / 0.093 on CVT meshes of the package graded at 0.15 / 0.075, 0.10 / 0.08 /
-    0.18 on gmsh meshes graded at 0.1 / 0.075 / 0.2, at most 0.06 on uniform CVT
-    meshes and 0.099 on uniform random points (largest node values)."""
+    0.152 / 0.094 on CVT meshes of the package graded at 0.15 / 0.075, 0.105 / 0.082 /
+    0.188 on gmsh meshes graded at 0.1 / 0.075 / 0.2; at single nodes off the boundary
+    up to 0.068 on uniform CVT meshes and 0.134 on uniform random points (in regions
+    too small to flag)."""
     n, p, t = mesh.n_points, mesh.points, mesh.triangles
     h = ring_mean(mesh, _median_bond(mesh), GRADING_RINGS)
     x = p[t]
@@ -367,12 +369,8 @@ def _raw_hull(mesh: Mesh) -> bool:
     """Whether ``mesh``'s boundary looks like the hull of raw points (slivers)."""
     bt = mesh.topology.bond_tris
     tris = bt[bt[:, 1] < 0, 0]  # a triangle at every boundary bond
-    x = mesh.points[mesh.triangles[tris]]  # (k, 3, 2)
-    e = np.roll(x, -1, axis=1) - x  # the three edges
-    ln = np.linalg.norm(e, axis=2)
-    cos = -np.sum(e * np.roll(e, 1, axis=1), axis=2) / (ln * np.roll(ln, 1, axis=1))
-    smallest = np.degrees(np.arccos(np.clip(cos, -1, 1))).min(axis=1)
-    return bool(np.mean(smallest < SLIVER_ANGLE) > HULL_SLIVERS)
+    sine = _geometry.smallest_sine(_geometry.of(mesh), tris)
+    return bool(np.mean(sine < np.sin(np.radians(SLIVER_ANGLE))) > HULL_SLIVERS)
 
 
 def _median_bond(mesh: Mesh) -> np.ndarray:
