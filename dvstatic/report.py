@@ -9,6 +9,7 @@ import numpy as np
 
 from .errors import InputError
 from .fem import compare
+from .lattice.cells import CELL_RINGS
 from .mesh import Mesh
 from .mesh.locate import interpolate, snap_point
 
@@ -250,6 +251,7 @@ def _model_summary(model) -> dict:
         "bonds": model.bonds,
         "boundary_cells": model.boundary_cells,
         "exact_cells": int(len(model.cell_triangles)),
+        "cell_rings": CELL_RINGS if len(model.cell_triangles) else None,
         "k_n": model.k_n,
         "nu_m": model.nu_m,
         "stabilised": model.micro.stabilised,

@@ -59,8 +59,10 @@ def test_default_error_decreases_under_refinement_uniaxial(cls):
     errs = [_uniaxial_error(dv.mesh.rectangle(1, 1, h), cls, 0.2) for h in (1 / 12, 1 / 24, 1 / 48)]
     assert np.all(np.diff(errs) < 0), errs
     assert errs[-1] < 0.015  # about 2,900 nodes
-    # first order: each halving of h removes at least a third of the error
-    assert errs[2] < 0.67 * errs[1] < 0.67**2 * errs[0]
+    # converging: two halvings of h remove at least half of the error (0.68 of it per
+    # halving here; the exact cells make the coarse meshes' error the smaller: DV 1.01 /
+    # 0.69 / 0.47 %, one layer of cells 1.49 / 0.89 / 0.53 %)
+    assert errs[2] < 0.5 * errs[0]
 
 
 @pytest.mark.parametrize("cls", [dv.DV, dv.RV])
@@ -126,7 +128,8 @@ def test_stabilised_lattice_is_stable_where_the_paper_model_is_not():
     mesh = dv.mesh.rectangle(1, 1, 0.1, kind="random", seed=1)
     sup = [dv.Fix("left", x=0.0), dv.Fix("bottom", y=0.0)]
     assert not dv.stability(dv.DV(mesh, E, 0.2, **PAPER), sup).stable
-    model = dv.DV(mesh, E, 0.2)
+    # the stabilised coupling on its own (the exact cells would cover this small mesh)
+    model = dv.DV(mesh, E, 0.2, boundary_cells="lattice")
     rep = dv.stability(model, sup)
     assert rep.stable and rep.margin > 0
     # every triangle keeps at least MARGIN of its springs
@@ -163,7 +166,8 @@ def test_the_linear_lattice_is_p1_with_per_triangle_tensors(cls):
     import scipy.sparse as sp
 
     mesh = dv.mesh.rectangle(1, 1, 0.2, kind="random", seed=3)
-    model = cls(mesh, 1e3, 0.25)
+    # the plain lattice: on so small a mesh the exact cells would be every triangle
+    model = cls(mesh, 1e3, 0.25, boundary_cells="lattice")
     C = model.triangle_tensors()
     x = mesh.triangle_coordinates()
     area = np.asarray(mesh.triangle_areas)

@@ -214,7 +214,7 @@ def test_large_fe_systems_are_solved_by_amg_cg_as_directly(monkeypatch):
     mesh, sup, ld = _ring_problem()
     direct = fem.solve(mesh, 1e4, 0.3, sup, ld, order=2)
     assert direct.info.solver == "direct"
-    monkeypatch.setattr(fem.system, "FE_AMG_DOF", 10)
+    monkeypatch.setattr(fem.system, "FE_AMG_ENTRIES", 10)
     amg = fem.solve(mesh, 1e4, 0.3, sup, ld, order=2)
     assert amg.info.solver == "amg-cg" and amg.info.iterations > 0
     assert np.abs(amg.u - direct.u).max() <= 1e-9 * np.abs(direct.u).max()

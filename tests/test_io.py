@@ -153,6 +153,8 @@ def test_summary_json_and_png(solution, tmp_path):
     ):
         assert key in d
     assert d["mesh"]["sigma_L"] == pytest.approx(solution.model.mesh.edge_length_spread())
+    assert d["model"]["cell_rings"] == 3  # the exact cells' depth, with their count
+    assert d["model"]["exact_cells"] == len(solution.model.cell_triangles) > 0
     assert d["reactions"]["left"]["x"] == pytest.approx(1.0, rel=1e-9)
 
     path = io.write_json(tmp_path / "s.json", d)

@@ -131,17 +131,15 @@ def test_petsc_solves_a_mesh_calibrated_by_class_as_the_direct_solver_does():
 
 def test_patch_rows_equal_global_rows_on_a_mesh_calibrated_by_class():
     """The patches take their triangles' k_n and nu_m (the distributed engine's way)."""
-    from dvstatic.parallel.partition import layout, patch_triangles
+    from dvstatic.parallel.partition import layout, patch_model
 
     mesh = mixed()
     model = dv.DV(mesh, E, NU)
     K = model.stiffness()
     for rank in range(2):
         lay = layout(mesh, rank, 2)
-        pm = dv.DV(lay.patch, E, NU, calibration=model.micro)
-        object.__setattr__(
-            pm, "micro_field", model.micro_field.restricted(patch_triangles(mesh, lay))
-        )
+        pm = patch_model(model, lay)
+        assert pm.micro_field is not None
         gd = np.stack([2 * lay.local_nodes, 2 * lay.local_nodes + 1], axis=1).reshape(-1)
         n2 = 2 * lay.n_owned
         assert abs(pm.stiffness()[:n2] - K[gd[:n2]][:, gd]).max() < 1e-9 * abs(K).max()

@@ -34,7 +34,7 @@ def test_dynamic_relaxation_refuses_unstable_lattice():
     sup, ld = uniaxial_problem()
     with pytest.raises(dv.SolverError, match="blew up|did not reach"):
         dv.solve(
-            dv.DV(m, E_BEAM, -0.5, calibration="paper", bonds="uniform"),
+            dv.DV(m, E_BEAM, -0.5, calibration="paper", bonds="uniform", boundary_cells="lattice"),
             sup,
             ld,
             solver="dynamic-relaxation",

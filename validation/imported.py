@@ -11,7 +11,7 @@ Problems (each at two refinements, DV and RV with the default springs and with
   the bore: L2 error against Lame's exact field, hoop stress at the bore (rms over the
   bore nodes);
 * Cook's membrane (plane strain), graded towards the loaded corner: tip deflection
-  against 32.27 (and P1 on the same triangles).
+  against 32.30 (``_benchmarks.COOK_TIP``; and P1 on the same triangles).
 
 gmsh (GPL) is not a dependency of dvstatic: ``pip install gmsh`` to run this script.
 The meshes are made here, in a temporary folder.

@@ -33,5 +33,5 @@ class FEInfo(Record):
     thickness: float
     load_resultant: np.ndarray  #: total applied force (fx, fy)
     seconds: FETimings
-    solver: str = "direct"  #: "direct" (SuperLU) or "amg-cg" (above ``FE_AMG_DOF`` dof)
+    solver: str = "direct"  #: "direct" (SuperLU) or "amg-cg" (above ``FE_AMG_ENTRIES`` entries)
     iterations: int = 0  #: CG iterations, or the direct solve's refinement steps

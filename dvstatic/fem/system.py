@@ -14,29 +14,34 @@ from ..linalg import AMGSolver, DirectSolver, SolveRecord
 if TYPE_CHECKING:
     import scipy.sparse as sp
 
-__all__ = ["FE_AMG_DOF", "FE_CG_RTOL", "solve_spd"]
+__all__ = ["FE_AMG_ENTRIES", "FE_CG_RTOL", "solve_spd"]
 
 log = logging.getLogger(__name__)
 
-#: FE systems with more unknowns than this are solved by AMG-CG (rigid-body modes),
-#: smaller ones directly (P2, plate_with_hole refined once, 2.8e5 dof: AMG-CG 3.9 s and
-#: no memory beyond the assembly's, SuperLU 7.5 s and 1.1 GB more; at 5.7e4 dof
-#: SuperLU 0.7 s, AMG-CG 0.9 s)
-FE_AMG_DOF = 100_000
+#: FE systems with more stored entries than this (the full symmetric matrix: about 1e5 P2
+#: dof)
+#: are solved by AMG-CG (rigid-body modes), smaller ones directly. SuperLU's fill grows
+#: with the entries per row, higher for P3 and P4 than for P2 at the same dof (P2,
+#: plate_with_hole refined once, 2.8e5 dof: AMG-CG 3.9 s and no memory beyond the
+#: assembly's, SuperLU 7.5 s and 1.1 GB more; at 5.7e4 dof SuperLU 0.7 s, AMG-CG 0.9 s;
+#: P3 on the thick_cylinder example, 7.5e4 dof and 2.5e6 entries: SuperLU 0.9 s and a
+#: peak of 452 MB, AMG-CG 2.9 s and 296 MB, the run without FE 198 MB)
+FE_AMG_ENTRIES = 2_300_000
 #: relative residual of the FE reference's AMG-CG solve
 FE_CG_RTOL = 1e-11
 
 
 def solve_spd(A: sp.spmatrix, b: np.ndarray, locs: np.ndarray, comp: np.ndarray):
-    """Solve the condensed FE system, returning ``(x, solver, iterations)``: AMG-CG
-    above :data:`FE_AMG_DOF` unknowns (the direct solve if it does not converge), else
+    """Solve the condensed FE system ``A`` (the full symmetric matrix), returning
+    ``(x, solver, iterations)``: AMG-CG above :data:`FE_AMG_ENTRIES` stored entries (the
+    direct solve if it does not converge), else
     SuperLU in symmetric mode with its minimum-degree ordering on ``A^T + A`` (on the
     beam example's P2 systems half the fill and half the time of a nested dissection of
     the dof locations: 8.2e6 against 1.8e7 factor entries at 5.7e4 dof)."""
     import scipy.sparse as sp
 
     A = sp.csr_matrix(A)
-    if A.shape[0] > FE_AMG_DOF:
+    if A.nnz > FE_AMG_ENTRIES:
         x, its = _solve_amg(A, b, locs, comp)
         if x is not None:
             return x, "amg-cg", its

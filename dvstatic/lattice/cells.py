@@ -17,6 +17,14 @@ the bonds' own, so forces, tangent, stresses and fracture criteria read it as an
 part of the tension. A damaged cell keeps ``min(d)`` of it, as of its Voronoi coupling
 (:mod:`dvstatic.lattice.damage`): a cracked cell falls back to its springs.
 
+The cells reach :data:`CELL_RINGS` = 3 rings of bonds into the body (four layers of
+triangles). The relaxed calibration holds where a triangle's neighbours relax with it
+on every side; near a boundary they do not, and a mesher's boundary rows meet its
+interior in a disordered zone about three rings deep (gmsh: ring spread 0.067 / 0.061
+/ 0.038 against 0.004 inside). One layer of cells left a uniform gmsh ring's Lame
+displacement 1.18 % off at 7,174 nodes and Cook's membrane 1.1 % stiff; four layers
+give 0.22 % and 0.37 % (docs/theory.md 8.2b).
+
 Slivers (smallest angle below about 3 degrees, :data:`CELL_SINE`) stay lattice
 triangles: their ``E_T`` is near singular.
 """
@@ -32,6 +40,7 @@ from .stabilise import reference_matrices
 
 __all__ = [
     "BOUNDARY_CELLS",
+    "CELL_RINGS",
     "boundary_triangles",
     "isotropic_tensor",
     "unit_elongations",
@@ -44,18 +53,26 @@ BOUNDARY_CELLS = ("exact", "lattice")
 #: triangles whose smallest angle has a sine below this (about 3 degrees) stay lattice
 #: triangles: ``E_T^-1`` grows as 1 / sine and would make the cell needlessly stiff
 CELL_SINE = 0.05
+#: the cells reach this many rings of bonds into the body (:func:`boundary_triangles`):
+#: four layers of triangles, the boundary's own and three more
+CELL_RINGS = 3
 
 
-def boundary_triangles(mesh: Mesh) -> np.ndarray:
-    """Indices of the triangles with a vertex on the mesh's boundary (holes, inner
-    boundaries and straight edges alike), slivers (:data:`CELL_SINE`) left out, shape
-    (k,) int; empty for periodic meshes."""
+def boundary_triangles(mesh: Mesh, rings: int = CELL_RINGS) -> np.ndarray:
+    """Indices of the triangles with a vertex at most ``rings`` rings of bonds from the
+    mesh's boundary (holes, inner boundaries and straight edges alike; 0: a vertex on
+    it), slivers (:data:`CELL_SINE`) left out, shape (k,) int; empty for periodic
+    meshes."""
     if mesh.is_periodic:
         return np.zeros(0, dtype=np.int64)
-    on = np.zeros(mesh.n_points, dtype=bool)
-    on[mesh.boundary_nodes] = True
+    near = np.zeros(mesh.n_points, dtype=bool)
+    near[mesh.boundary_nodes] = True
+    b = mesh.topology.bonds
+    for _ in range(rings):
+        step = near[b[:, 0]] | near[b[:, 1]]
+        near[b[step].ravel()] = True
     sine = _geometry.smallest_sine(_geometry.of(mesh))
-    return np.flatnonzero(on[mesh.triangles].any(axis=1) & (sine >= CELL_SINE))
+    return np.flatnonzero(near[mesh.triangles].any(axis=1) & (sine >= CELL_SINE))
 
 
 def isotropic_tensor(E: float, nu: float) -> np.ndarray:

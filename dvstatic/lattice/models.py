@@ -35,6 +35,7 @@ from . import calibration
 from . import geometry as _geometry
 from .cells import (
     BOUNDARY_CELLS,
+    CELL_RINGS,
     boundary_triangles,
     cell_corrections,
     cell_tensors,
@@ -122,12 +123,14 @@ class VoronoiModel:
         With ``damage``: cracked bonds whose faces are closed (in contact), which carry
         compression with their whole spring (their triangles' coupling stays off).
     boundary_cells : {"exact", "lattice"}
-        ``"exact"`` (default): every triangle with a vertex on the boundary is an exact
-        cell, a lattice triangle with a 3x3 coupling of its three bonds that gives it
-        the isotropic tensor of its material, so the cells cut to fit a boundary are
-        exactly P1 (:mod:`dvstatic.lattice.cells`; at Kirsch's hole on the default mesh
-        at 2e4 nodes the hoop stress at the top goes from -5.8 % to -1.3 %:
-        docs/validation.md). ``"lattice"``: the plain lattice everywhere (the paper).
+        ``"exact"`` (default): every triangle with a vertex within
+        :data:`~dvstatic.lattice.cells.CELL_RINGS` (3) rings of bonds of the boundary
+        is an exact cell, a lattice triangle with a 3x3 coupling of its three bonds
+        that gives it the isotropic tensor of its material, so the layer cut to fit a
+        boundary is exactly P1 (:mod:`dvstatic.lattice.cells`; at Kirsch's hole on the
+        default mesh at 2e4 nodes the hoop stress at the top goes from -5.8 % to -1.3 %
+        with one layer; imported meshes' disordered boundary zones need the four:
+        docs/theory.md 8.2b). ``"lattice"``: the plain lattice everywhere (the paper).
 
     Raises
     ------
@@ -444,11 +447,23 @@ class VoronoiModel:
 
     @cached_property
     def cell_triangles(self) -> np.ndarray:
-        """The exact cells (``boundary_cells="exact"``): the triangles with a vertex on
-        the boundary, shape (k,) int (empty with ``"lattice"`` or on periodic meshes)."""
+        """The exact cells (``boundary_cells="exact"``): the triangles with a vertex
+        within :data:`~dvstatic.lattice.cells.CELL_RINGS` rings of bonds of the boundary,
+        shape (k,) int (empty with ``"lattice"`` or on periodic meshes). A body less
+        than about eight spacings across is then all cells (P1): logged."""
         if self.boundary_cells == "lattice":
             return np.zeros(0, dtype=np.int64)
-        return boundary_triangles(self.mesh)
+        cells = boundary_triangles(self.mesh)
+        if len(cells) > 0.9 * self.mesh.n_triangles:
+            log.info(
+                "%d of the %d triangles are exact cells (within %d rings of the boundary): "
+                "the body is P1 but for %d; boundary_cells='lattice' keeps the lattice",
+                len(cells),
+                self.mesh.n_triangles,
+                CELL_RINGS,
+                self.mesh.n_triangles - len(cells),
+            )
+        return cells
 
     def _cell_dq(self, spring: np.ndarray, coupling: np.ndarray) -> np.ndarray:
         """The exact cells' bond matrices (k, 3, 3) for the intact springs and couplings."""

@@ -13,6 +13,8 @@ from .partition import (
     owned_triangles,
     patch_bond_weights,
     patch_memory,
+    patch_model,
+    patch_triangles,
     rcb_partition,
 )
 
@@ -28,4 +30,6 @@ __all__ = [
     "owned_loads",
     "patch_bond_weights",
     "patch_memory",
+    "patch_model",
+    "patch_triangles",
 ]

@@ -56,6 +56,8 @@ __all__ = [
     "owned_loads",
     "patch_bond_weights",
     "patch_memory",
+    "patch_model",
+    "patch_triangles",
 ]
 
 log = logging.getLogger(__name__)
@@ -242,6 +244,35 @@ def patch_triangles(mesh: Mesh, lay: Layout) -> np.ndarray:
     first, second = topo.bond_tris[bond, 0], topo.bond_tris[bond, 1]
     has = np.any(mesh.triangles[first] == pt[:, 2:3], axis=1)
     return np.where(has, first, second)
+
+
+def patch_model(model, lay: Layout, micros: tuple | None = None):
+    """``model`` on the rank's patch, with what reaches beyond the patch's two rings
+    read from the whole (replicated) mesh: the spring weights
+    (:func:`patch_bond_weights`), the exact cells (the whole mesh's boundary triangles
+    :data:`~dvstatic.lattice.cells.CELL_RINGS` rings deep, not the patch's cut) and a
+    class-by-class calibration's micro-parameters. ``micros``: one MicroParameters per
+    material (default: the model's)."""
+    micros = model.micros if micros is None else tuple(micros)
+    pm = type(model)(
+        lay.patch,
+        model.E,
+        model.nu,
+        calibration=micros if len(micros) > 1 else micros[0],
+        bonds=model.bonds,
+        plane=model.plane,
+        thickness=model.thickness,
+        materials={k: (m.E, m.nu) for k, m in model.materials.items()},
+        boundary_cells=model.boundary_cells,
+    )
+    object.__setattr__(pm, "bond_weight", patch_bond_weights(model, lay))  # cached
+    tri_global = patch_triangles(model.mesh, lay)
+    is_cell = np.zeros(model.mesh.n_triangles, dtype=bool)
+    is_cell[model.cell_triangles] = True
+    object.__setattr__(pm, "cell_triangles", np.flatnonzero(is_cell[tri_global]))
+    if model.micro_field is not None:  # a mesh calibrated class by class
+        object.__setattr__(pm, "micro_field", model.micro_field.restricted(tri_global))
+    return pm
 
 
 def owned_loads(mesh: Mesh, loads, lay: Layout, thickness: float = 1.0) -> np.ndarray:

@@ -30,9 +30,8 @@ from .partition import (
     micro_parameters,
     owned_bonds,
     owned_loads,
-    patch_bond_weights,
     patch_memory,
-    patch_triangles,
+    patch_model,
 )
 
 __all__ = ["DEFAULT_OPTIONS", "PREFIX", "solve"]
@@ -282,26 +281,7 @@ def _prepare(PETSc, comm, model, supports, loads, opts, seconds: dict) -> _Setup
         model.calibration_flags  # noqa: B018 (the cached_property, logged on first use)
     seconds["calibration"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    pm = type(model)(
-        lay.patch,
-        model.E,
-        model.nu,
-        calibration=micros if len(micros) > 1 else micros[0],
-        bonds=model.bonds,
-        plane=model.plane,
-        thickness=model.thickness,
-        materials={k: (m.E, m.nu) for k, m in model.materials.items()},
-        boundary_cells=model.boundary_cells,
-    )
-    object.__setattr__(pm, "bond_weight", patch_bond_weights(model, lay))  # cached
-    tri_global = patch_triangles(model.mesh, lay)
-    # the exact cells are the whole mesh's boundary triangles, not the patch's
-    is_cell = np.zeros(mesh.n_triangles, dtype=bool)
-    is_cell[model.cell_triangles] = True
-    object.__setattr__(pm, "cell_triangles", np.flatnonzero(is_cell[tri_global]))
-    if model.micro_field is not None:  # a mesh calibrated class by class: its triangles'
-        field = model.micro_field.restricted(tri_global)
-        object.__setattr__(pm, "micro_field", field)  # the cached_property
+    pm = patch_model(model, lay, micros)
     cnew = 2 * lay.new_of[dofs // 2] + dofs % 2
     order = np.argsort(cnew)
     cdofs, cvals = cnew[order], values[order]

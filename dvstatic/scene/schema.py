@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 from ..crack.options import FractureOptions
 from ..errors import InputError
+from ..lattice.cells import CELL_RINGS
 from ..mesh.generators import DEFAULT_JITTER
 from ..report import CHECK_QUANTITIES
 from ..solvers.options import SolveOptions
@@ -195,9 +196,10 @@ SCHEMA: dict[str, F] = {
             ),
             "boundary_cells": F(
                 "string",
-                "exact (the triangles with a vertex on the boundary carry the material's "
-                "isotropic tensor through a coupling of their three bonds: exactly P1 "
-                "where the cells are cut to fit the boundary) or lattice (the plain "
+                f"exact (the triangles with a vertex within {CELL_RINGS} rings of bonds of the "
+                "boundary carry the material's isotropic tensor through a coupling of "
+                "their three bonds: exactly P1 where the cells are cut to fit the "
+                "boundary and where a mesher's rows meet its interior) or lattice (the plain "
                 "lattice everywhere). The paper's model: calibration = paper, bonds = "
                 "uniform, boundary_cells = lattice",
                 default="exact",
