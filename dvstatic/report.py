@@ -451,7 +451,8 @@ def fracture_lines(result, checks: list[dict], title: str, written=()) -> list[s
     lines.append(
         f"  time      strengths {t.strength:.2f} s, events {t.events:.2f} s "
         f"({result.stats.events_per_second:.1f} events/s, "
-        f"{result.stats.factorisations} factorisations)"
+        f"{result.stats.factorisations} factorisation"
+        f"{'' if result.stats.factorisations == 1 else 's'})"
     )
     lines += [f"  wrote     {w}" for w in written]
     return lines
