@@ -160,3 +160,15 @@ def test_the_cells_cover_an_imported_meshs_disordered_boundary_zone(cls):
         sol = dv.solve(model, sup, dv.Pressure("bore", p))
         err[rings] = dv.compare(sol, exact, rigid=True).l2
     assert err[CELL_RINGS] < 0.016 and err[CELL_RINGS] < 0.4 * err[0], err
+
+
+def test_a_body_made_almost_all_of_cells_says_so(caplog):
+    small = dv.mesh.rectangle(1.0, 0.5, 0.1, kind="jittered", seed=1)  # 5 rows across
+    with caplog.at_level("INFO", logger="dvstatic.lattice.cells"):
+        model = dv.DV(small, E, NU)
+        assert len(model.cell_triangles) > 0.9 * small.n_triangles
+    assert "exact cells" in caplog.text and "boundary_cells='lattice'" in caplog.text
+    caplog.clear()
+    with caplog.at_level("INFO", logger="dvstatic.lattice.cells"):
+        assert len(dv.DV(dv.mesh.rectangle(2.0, 1.0, 0.05, kind="jittered"), E, NU).cell_triangles)
+    assert "exact cells" not in caplog.text

@@ -31,6 +31,8 @@ triangles: their ``E_T`` is near singular.
 
 from __future__ import annotations
 
+import logging
+
 import numpy as np
 
 from ..mesh import Mesh
@@ -42,6 +44,7 @@ __all__ = [
     "BOUNDARY_CELLS",
     "CELL_RINGS",
     "boundary_triangles",
+    "exact_cells",
     "isotropic_tensor",
     "unit_elongations",
     "cell_corrections",
@@ -56,6 +59,8 @@ CELL_SINE = 0.05
 #: the cells reach this many rings of bonds into the body (:func:`boundary_triangles`):
 #: four layers of triangles, the boundary's own and three more
 CELL_RINGS = 3
+
+log = logging.getLogger(__name__)
 
 
 def boundary_triangles(mesh: Mesh, rings: int = CELL_RINGS) -> np.ndarray:
@@ -73,6 +78,23 @@ def boundary_triangles(mesh: Mesh, rings: int = CELL_RINGS) -> np.ndarray:
         near[b[step].ravel()] = True
     sine = _geometry.smallest_sine(_geometry.of(mesh))
     return np.flatnonzero(near[mesh.triangles].any(axis=1) & (sine >= CELL_SINE))
+
+
+def exact_cells(mesh: Mesh) -> np.ndarray:
+    """The models' exact cells: :func:`boundary_triangles` :data:`CELL_RINGS` deep, shape
+    (k,) int; logged when they are more than 90 % of the triangles (a body less than
+    about eight spacings across is then P1 but for its middle)."""
+    cells = boundary_triangles(mesh)
+    if len(cells) > 0.9 * mesh.n_triangles:
+        log.info(
+            "%d of the %d triangles are exact cells (within %d rings of the boundary): the "
+            "body is P1 but for %d; boundary_cells='lattice' keeps the lattice",
+            len(cells),
+            mesh.n_triangles,
+            CELL_RINGS,
+            mesh.n_triangles - len(cells),
+        )
+    return cells
 
 
 def isotropic_tensor(E: float, nu: float) -> np.ndarray:

@@ -33,14 +33,7 @@ from ..material import Elastic
 from ..mesh import Mesh
 from . import calibration
 from . import geometry as _geometry
-from .cells import (
-    BOUNDARY_CELLS,
-    CELL_RINGS,
-    boundary_triangles,
-    cell_corrections,
-    cell_tensors,
-    isotropic_tensor,
-)
+from .cells import BOUNDARY_CELLS, cell_corrections, cell_tensors, exact_cells, isotropic_tensor
 from .flags import model_flags
 from .operator import RESIDUAL, LatticeOperator
 from .stabilise import clip_coupling, triangle_modes, triangle_tensors
@@ -447,23 +440,11 @@ class VoronoiModel:
 
     @cached_property
     def cell_triangles(self) -> np.ndarray:
-        """The exact cells (``boundary_cells="exact"``): the triangles with a vertex
-        within :data:`~dvstatic.lattice.cells.CELL_RINGS` rings of bonds of the boundary,
-        shape (k,) int (empty with ``"lattice"`` or on periodic meshes). A body less
-        than about eight spacings across is then all cells (P1): logged."""
+        """The exact cells (``boundary_cells="exact"``, :func:`.cells.exact_cells`), shape
+        (k,) int; empty with ``"lattice"`` or on periodic meshes."""
         if self.boundary_cells == "lattice":
             return np.zeros(0, dtype=np.int64)
-        cells = boundary_triangles(self.mesh)
-        if len(cells) > 0.9 * self.mesh.n_triangles:
-            log.info(
-                "%d of the %d triangles are exact cells (within %d rings of the boundary): "
-                "the body is P1 but for %d; boundary_cells='lattice' keeps the lattice",
-                len(cells),
-                self.mesh.n_triangles,
-                CELL_RINGS,
-                self.mesh.n_triangles - len(cells),
-            )
-        return cells
+        return exact_cells(self.mesh)
 
     def _cell_dq(self, spring: np.ndarray, coupling: np.ndarray) -> np.ndarray:
         """The exact cells' bond matrices (k, 3, 3) for the intact springs and couplings."""
