@@ -18,10 +18,9 @@ __all__ = ["FE_AMG_ENTRIES", "FE_CG_RTOL", "solve_spd"]
 
 log = logging.getLogger(__name__)
 
-#: FE systems with more stored entries than this (the full symmetric matrix: about 1e5 P2
-#: dof)
-#: are solved by AMG-CG (rigid-body modes), smaller ones directly. SuperLU's fill grows
-#: with the entries per row, higher for P3 and P4 than for P2 at the same dof (P2,
+#: FE systems with more stored entries than this (the full symmetric matrix: about 1e5
+#: P2 dof) are solved by AMG-CG (rigid-body modes), smaller ones directly. SuperLU's fill
+#: grows with the entries per row, higher for P3 and P4 than for P2 at the same dof (P2,
 #: plate_with_hole refined once, 2.8e5 dof: AMG-CG 3.9 s and no memory beyond the
 #: assembly's, SuperLU 7.5 s and 1.1 GB more; at 5.7e4 dof SuperLU 0.7 s, AMG-CG 0.9 s;
 #: P3 on the thick_cylinder example, 7.5e4 dof and 2.5e6 entries: SuperLU 0.9 s and a
