@@ -288,6 +288,32 @@ class DirectSolver:
         """``A^-1 b`` from the factors alone (no refinement); ``b`` (n,) or (n, k)."""
         return self._apply(b)
 
+    def apply_columns(self, u, out: np.ndarray | None = None) -> np.ndarray:
+        """``(A^-1 u)^T``, shape (k, n), for the sparse columns ``u`` (n, k): each
+        column's solution as a row (written into ``out`` (k, n), if given), the
+        right-hand sides placed in the factor's order directly."""
+        u = u.tocoo()
+        b = np.zeros(u.shape, order="F")
+        b[u.row if self.order is None else self._inverse[u.row], u.col] = u.data
+        x = self.lu.solve(b).T  # (k, n), C-contiguous (SuperLU answers in Fortran order)
+        if out is None:
+            out = np.empty(x.shape)
+        if self.order is None:
+            out[...] = x
+        else:
+            for row, sol in zip(out, x, strict=True):  # (1-D gathers: a 2-D take is slow)
+                np.take(sol, self._inverse, out=row)
+        return out
+
+    @property
+    def _inverse(self) -> np.ndarray:
+        """Where every unknown sits in the factor's order."""
+        inv = getattr(self, "_inv", None)
+        if inv is None:
+            inv = self._inv = np.empty_like(self.order)
+            inv[self.order] = np.arange(len(self.order))
+        return inv
+
     def _apply(self, b: np.ndarray) -> np.ndarray:
         if self.order is None:
             return self.lu.solve(b)
@@ -412,7 +438,7 @@ def preconditioned_cg(A, b, M, x0=None, rtol: float = 1e-10, maxiter: int = 500)
     return x, SolveRecord(it, hist, indefinite=bool(indefinite))
 
 
-def nested_dissection(points: np.ndarray, edges: np.ndarray, leaf: int = 128) -> np.ndarray:
+def nested_dissection(points: np.ndarray, edges: np.ndarray, leaf: int = 16) -> np.ndarray:
     """Node order: each part split at the median of its longer extent, then
     ``[order(left), order(right), separator]``, recursively.
 

@@ -135,30 +135,24 @@ class UpdatedSolver:
         if r > self.max_rank:
             self.stale = True
             return
-        self._grow(r)
+        self._room()
         u_new = self._columns(new[first // 3], first % 3)
-        zn = self.engine.apply(u_new.toarray())
+        zn = self.engine.apply_columns(u_new, out=self._zt[r_old:r])  # (new, 2N)
         self.columns_solved += len(bonds)
         u_all = u_new if self._u is None else sp.hstack([self._u, u_new], format="csc")
-        wn = u_all.T @ zn  # (r, new): W is symmetric as A0 is
-        self._zt[r_old:r] = zn.T
+        wn = (zn @ u_all).T  # (r, new): W is symmetric as A0 is
         self._wb[:r, r_old:r] = wn
         self._wb[r_old:r, :r_old] = wn[:r_old].T
         self._u = u_all
         self.pos[bonds] = np.arange(r_old, r)
         self.bonds = np.concatenate([self.bonds, bonds])
 
-    def _grow(self, r: int) -> None:
-        """Room for ``r`` columns (the buffers double, up to ``max_rank``)."""
-        if r > len(self._zt):
-            cap = max(r, min(2 * len(self._zt), self.max_rank), 48)
-            zt = np.empty((cap, len(self.free)))
-            wb = np.empty((cap, cap))
-            r_old = self.rank
-            zt[:r_old] = self._zt[:r_old]
-            if r_old:
-                wb[:r_old, :r_old] = self._wb[:r_old, :r_old]
-            self._zt, self._wb = zt, wb
+    def _room(self) -> None:
+        """The buffers of ``max_rank`` columns, made once (``np.empty``: the memory of a
+        row is only taken when it is written)."""
+        if len(self._zt) < self.max_rank:
+            self._zt = np.empty((self.max_rank, len(self.free)))
+            self._wb = np.empty((self.max_rank, self.max_rank))
 
     def _columns(self, tri: np.ndarray, k: np.ndarray):
         """U's columns (2N, len(tri)) CSC: the elongation gradients of the local edges

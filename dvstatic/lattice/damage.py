@@ -43,7 +43,7 @@ if TYPE_CHECKING:
 
     from .models import VoronoiModel
 
-__all__ = ["RESIDUAL", "TriangleSplit", "split"]
+__all__ = ["RESIDUAL", "TriangleSplit", "split", "csr_rows"]
 
 
 @dataclass(eq=False)
@@ -197,6 +197,68 @@ class TriangleSplit:
         out = self.patch_total(sig) / np.where(covered, total, 1.0)[:, None]
         return out, covered  # 0 where not covered
 
+    def local_measures(self, u, w, g, length, area, weight, bonds):
+        """:meth:`tension` and :meth:`patch_voigt` of ``bonds`` only, from the triangles
+        at their end nodes alone (the same sums in the same order as the whole-lattice
+        products, so the same numbers): tensions (k,), patch stresses (k, 3) and
+        ``covered`` (k,) of ``bonds`` (k,) int, distinct; ``weight`` (M,) or None as in
+        :meth:`patch_stress`."""
+        import scipy.sparse as sp
+
+        nodes, ends = np.unique(self.ends[bonds], return_inverse=True)
+        at = self._at_node
+        tri_of, starts = csr_rows(at.indptr, at.indices, nodes)
+        tris, pos = np.unique(tri_of, return_inverse=True)
+        rows = (3 * tris[:, None] + np.arange(3)).ravel()
+        elong = (self.elongations[rows] @ u).reshape(-1, 3)
+        f = w[tris] * elong + g[tris, None] * _rowdot(self.m[tris], elong)
+        tension = _gather_sum(self.tri_bonds[tris].ravel(), f.ravel(), bonds)
+        fl = f * length[tris]
+        a = area[tris]
+        if weight is not None:
+            fl *= weight[tris, None]
+            a = a * weight[tris]
+        sig = _rowdot(self._virial_rows[tris], fl)
+        node_sum = sp.csr_matrix(
+            (np.ones(len(pos)), pos, np.r_[starts, len(pos)]), shape=(len(nodes), len(tris))
+        )  # the rows ``nodes`` of ``_at_node`` on ``tris``
+        node_sig, node_area = node_sum @ sig, node_sum @ a
+        ends = ends.reshape(-1, 2)
+        total = node_area[ends[:, 0]] + node_area[ends[:, 1]]
+        covered = total > 0
+        s = (node_sig[ends[:, 0]] + node_sig[ends[:, 1]]) / np.where(covered, total, 1.0)[:, None]
+        return tension, s, covered
+
+    def triangle_change(self, du: np.ndarray) -> np.ndarray:
+        """Every triangle's largest elongation change of its edges (length) for the
+        displacement change ``du`` (2N,), shape (M,)."""
+        e = np.abs(self._bond_elongations @ du)
+        tb = self.tri_bonds
+        return np.maximum(np.maximum(e[tb[:, 0]], e[tb[:, 1]]), e[tb[:, 2]])
+
+    @cached_property
+    def _bond_elongations(self):
+        """(n_bonds, 2N) CSR: every bond's elongation (the row of its first local edge:
+        a bond's elongation is the same seen from either triangle)."""
+        _, first = np.unique(self.tri_bonds.ravel(), return_index=True)
+        return self.elongations[first]
+
+    def q_norms(self, w: np.ndarray, g: np.ndarray, length=None) -> np.ndarray:
+        """Every triangle's largest row sum of ``|Q_T|`` (M,): the largest force share
+        per unit elongation of any of its edges; with ``length`` (M, 3), the same of the
+        virial rows ``V_T diag(l_T) Q_T`` (a patch stress per unit elongation, times
+        area)."""
+        q = self.q(w, g)
+        if length is not None:
+            q = np.einsum("tck,tk,tkl->tcl", self._virial_rows, length, q)
+        return np.abs(q).sum(axis=2).max(axis=1)
+
+    @cached_property
+    def _virial_rows(self) -> np.ndarray:
+        """(M, 3, 3): ``(nx^2, ny^2, nx ny)`` (rows) of every local edge (columns)."""
+        n = _local_directions(self.b)
+        return np.stack([n[..., 0] ** 2, n[..., 1] ** 2, n[..., 0] * n[..., 1]], axis=1)
+
     @cached_property
     def _virial(self):
         """(3M, 3M) CSR, block diagonal: a triangle's edge forces times lengths to
@@ -205,8 +267,7 @@ class TriangleSplit:
         import scipy.sparse as sp
 
         m = len(self.b)
-        n = _local_directions(self.b)  # (M, 3 edges, 2)
-        vals = np.stack([n[..., 0] ** 2, n[..., 1] ** 2, n[..., 0] * n[..., 1]], axis=1)
+        vals = self._virial_rows
         rows = np.broadcast_to(3 * np.arange(m)[:, None, None] + np.arange(3)[:, None], (m, 3, 3))
         cols = np.broadcast_to(3 * np.arange(m)[:, None, None] + np.arange(3), (m, 3, 3))
         return sp.csr_matrix((vals.ravel(), (rows.ravel(), cols.ravel())), shape=(3 * m, 3 * m))
@@ -226,6 +287,34 @@ class TriangleSplit:
         ke = np.einsum("mki,mkl,mlj->mij", self.b, self.q(w, g), self.b)
         assembly.accumulate(pat, ke, data, slice(0, len(ke)))
         return assembly.to_bsr(pat, data)
+
+
+def _rowdot(m: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """``m @ v`` row by row, (t, 3, 3) times (t, 3), summed in the order of a CSR product
+    (so that a few rows give the numbers of the whole-lattice sparse products)."""
+    return m[:, :, 0] * v[:, 0, None] + m[:, :, 1] * v[:, 1, None] + m[:, :, 2] * v[:, 2, None]
+
+
+def _gather_sum(keys: np.ndarray, values: np.ndarray, wanted: np.ndarray) -> np.ndarray:
+    """Sums of ``values`` by ``keys`` for the keys ``wanted`` (k,) (in key order, as
+    ``np.bincount`` sums)."""
+    order = np.argsort(wanted)
+    sw = wanted[order]
+    k = np.minimum(np.searchsorted(sw, keys), len(sw) - 1)
+    own = sw[k] == keys
+    out = np.empty(len(wanted))
+    out[order] = np.bincount(k[own], values[own], len(sw))
+    return out
+
+
+def csr_rows(indptr: np.ndarray, indices: np.ndarray, rows: np.ndarray):
+    """The column indices of the rows ``rows`` of a CSR pattern one after another, and
+    where each row starts in them."""
+    lo, hi = indptr[rows], indptr[rows + 1]
+    counts = hi - lo
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]]).astype(np.int64)
+    idx = np.repeat(lo - starts, counts) + np.arange(counts.sum())
+    return indices[idx], starts
 
 
 def _local_directions(b: np.ndarray) -> np.ndarray:

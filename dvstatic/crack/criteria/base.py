@@ -21,7 +21,10 @@ from typing import ClassVar, NamedTuple
 import numpy as np
 
 from ..strength import bond_strength, principal_response, weibull_factors
+from . import screen
+from .ratios import linear_factors
 from .responses import per_bond, responses
+from .screen import Screen
 
 __all__ = ["Criterion", "Critical", "REGISTRY", "register", "criterion_for", "MODES"]
 
@@ -59,23 +62,6 @@ class Critical(NamedTuple):
     elongation: float  #: the bond's elongation in the critical state (length)
 
 
-def linear_factors(vh, vg, threshold):
-    """``(ratio, excess)`` of a criterion linear in the state: ``vh + lambda vg`` reaches
-    ``threshold`` at ``lambda = 1 / ratio`` (ratio 0: never); ``excess`` >= 1 where the
-    held part alone reaches it (``vh / threshold``), else 0. Without a held part the
-    ratio is ``vg / threshold`` exactly."""
-    room = threshold - vh
-    ok = room > 0
-    ratio = np.zeros(len(vg))
-    np.divide(vg, room, out=ratio, where=ok)
-    ratio[~(ratio > 0)] = 0.0
-    excess = np.zeros(len(vg))
-    np.divide(vh, threshold, out=excess, where=~ok & (threshold > 0))
-    excess[excess < 1.0] = 0.0
-    excess[~ok & ~(threshold > 0)] = np.inf  # no strength left: fails at once
-    return ratio, excess
-
-
 def _first_of_largest(values: np.ndarray) -> int:
     """The first index whose value ties with the largest (within :data:`TIE`)."""
     top = float(values.max())
@@ -111,6 +97,8 @@ class Criterion(ABC):
         self.h = None  # (n_bonds, 3): tension per unit xx, yy and xy stress
         #: the undamaged system :meth:`prepare` factorised (the event loop takes it over)
         self.factorised = None
+        #: which bonds an event evaluates (:mod:`.screen`; None: all of them)
+        self.screen: Screen | None = None
 
     # ------------------------------------------------------------------ to override
     def set_response(self, h: np.ndarray, patches) -> None:
@@ -125,9 +113,18 @@ class Criterion(ABC):
         ``ftb`` and the random-field ``factors`` (None: uniform)."""
 
     @abstractmethod
-    def __call__(self, x, w, g, intact=None) -> np.ndarray:
+    def __call__(self, x, w, g, intact=None, bonds=None) -> np.ndarray:
         """What every intact bond compares with its threshold, shape (n_bonds,), in the
-        state ``x`` (per unit load factor) of the damaged stiffness ``w, g``."""
+        state ``x`` (per unit load factor) of the damaged stiffness ``w, g``; of
+        ``bonds`` (int array) only, if given."""
+
+    def lipschitz(self) -> np.ndarray | None:
+        """For a criterion linear in the state: per bond (n_bonds,), a bound on how far
+        its value moves per unit of the largest elongation change over the triangles at
+        its end nodes while they are undamaged; then an event evaluates only the bonds
+        that can be critical (:mod:`.screen`). None (the default): every bond, every
+        event."""
+        return None
 
     def set_parameters(self, model, ftb, factors, **params) -> None:
         """Take the criterion's own strengths (:attr:`parameters`, checked by the
@@ -165,13 +162,18 @@ class Criterion(ABC):
         s = self.thresholds(s_t, ftb, factors)
         self.s_tension = s_t
         self.set_parameters(model, ftb, factors, **(params or {}))
+        self.screen = None
+        if type(self).factors is Criterion.factors and mesh.n_bonds >= screen.MIN_BONDS:
+            lip = self.lipschitz()
+            self.screen = None if lip is None else Screen(self.sp, mesh.points, lip, TIE)
         timings["strength"] = time.perf_counter() - t0
         return s, s_t
 
-    def softening(self, x) -> np.ndarray:
+    def softening(self, x, bonds=None) -> np.ndarray:
         """What a cracked bond softens by: its elongation (length) per unit load factor,
-        shape (n_bonds,)."""
-        return self._elongation @ np.asarray(x).ravel()
+        shape (n_bonds,); of ``bonds`` (int array) only, if given."""
+        op = self._elongation if bonds is None else self._elongation[bonds]
+        return op @ np.asarray(x).ravel()
 
     @cached_property
     def _elongation(self):
@@ -186,12 +188,13 @@ class Criterion(ABC):
             (vals.ravel(), (np.repeat(np.arange(e), 4), dofs.ravel())), shape=(e, n_dof)
         )
 
-    def cracked(self, x, modes, sense, elongation=None) -> np.ndarray:
+    def cracked(self, x, modes, sense, elongation=None, bonds=None) -> np.ndarray:
         """The softening measure of every cracked bond in state ``x``, linear in ``x``,
-        shape (n_bonds,): its elongation (``elongation``, if computed already) times its
+        shape (n_bonds,), or of ``bonds`` only (``modes``, ``sense`` and ``elongation``
+        then theirs): its elongation (``elongation``, if computed already) times its
         ``sense`` (``modes``, the modes the bonds first failed in, are for criteria that
         soften faces in shear)."""
-        return sense * (self.softening(x) if elongation is None else elongation)
+        return sense * (self.softening(x, bonds) if elongation is None else elongation)
 
     def crack_measure(self, e: int, mode: int, x, d=None) -> tuple[float, float, float | None]:
         """``(peak, sense, spring)`` of bond ``e`` cracking in ``mode`` in state ``x``
@@ -211,15 +214,21 @@ class Criterion(ABC):
         their first failure (``modes``, n_bonds,); bonds the
         held part alone overloads come first, at ``lambda = 0``, the most overloaded one
         first; of bonds that tie (within :data:`TIE`) the first by index."""
-        sg = self.softening(xg)
-        sh = 0.0 if xh is None else self.softening(xh)
-        ratio, excess, mode = self.factors(xh, xg, w, g, intact, threshold)
         c = np.flatnonzero(d < 1.0)  # cracked: by their softening measure
+        rc = ec = np.zeros(0)
         if len(c):
-            ch = 0.0 if xh is None else self.cracked(xh, modes, sense, sh)[c]
-            cg = self.cracked(xg, modes, sense, sg)[c]
-            ratio[c], excess[c] = linear_factors(ch, cg, threshold[c])
-            mode[c] = np.broadcast_to(modes, d.shape)[c]
+            mc, sc = np.broadcast_to(modes, d.shape)[c], np.broadcast_to(sense, d.shape)[c]
+            ch = 0.0 if xh is None else self.cracked(xh, mc, sc, bonds=c)
+            rc, ec = linear_factors(ch, self.cracked(xg, mc, sc, bonds=c), threshold[c])
+        if self.screen is None:
+            ratio, excess, mode = self.factors(xh, xg, w, g, intact, threshold)
+        else:
+            floor = float(np.max(rc, where=d[c] > 0, initial=0.0))
+            args = (self, xh, xg, w, g, intact, threshold, d >= 1.0, floor)
+            ratio, excess = self.screen.factors(*args)
+            mode = np.zeros(len(ratio), dtype=np.int64)
+        ratio[c], excess[c] = rc, ec
+        mode[c] = np.broadcast_to(modes, d.shape)[c]
         gone = d <= 0
         ratio[gone] = excess[gone] = 0.0
         if np.any(excess >= 1.0):
@@ -228,5 +237,7 @@ class Criterion(ABC):
         else:
             e = _first_of_largest(ratio)
             lam = 1.0 / ratio[e] if ratio[e] > 0 else np.inf
-        el = float(sg[e]) * (lam if np.isfinite(lam) else 0.0) + (0.0 if xh is None else sh[e])
+        el = float(self.softening(xg, [e])[0]) * (lam if np.isfinite(lam) else 0.0)
+        if xh is not None:
+            el += float(self.softening(xh, [e])[0])
         return Critical(e, lam, int(mode[e]), el)

@@ -104,16 +104,17 @@ class MohrCoulomb(Stress):
         tau = v[:, 2] * (nx2 - ny2) + nxy * (v[:, 1] - v[:, 0])
         return sn, tau, v[:, 3]
 
-    def cracked(self, x, modes, sense, elongation=None) -> np.ndarray:
+    def cracked(self, x, modes, sense, elongation=None, bonds=None) -> np.ndarray:
         """Cracked in tension: the elongation times its sense. Failed in shear or
         crushing: Coulomb's measure ``s tau + sigma_n tan(phi)`` of the face's own trial
         stress (:meth:`trial`; ``s`` the sense of the shear as the face failed), which a
         softening face's strain makes grow as it softens."""
-        out = super().cracked(x, modes, sense, elongation)
+        out = super().cracked(x, modes, sense, elongation, bonds)
         shear = np.asarray(modes) != 0
         if np.any(shear):
-            sn, tau, _ = self.trial(x)
-            out = np.where(shear, sense * tau + sn * self.tan, out)
+            sl = slice(None) if bonds is None else bonds
+            sn, tau, _ = (v[sl] for v in self.trial(x))
+            out = np.where(shear, sense * tau + sn * self.tan[sl], out)
         return out
 
     def crack_measure(self, e: int, mode: int, x, d=None):

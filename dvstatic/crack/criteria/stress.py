@@ -53,9 +53,26 @@ class Stress(Criterion):
         scale = ftb * self.h_nn * (1.0 if factors is None else factors)
         return np.where(self.use_tension, s_tension, scale)
 
-    def __call__(self, x, w, g, intact=None) -> np.ndarray:
-        normal, _, covered, t = self._parts(x, w, g, intact)
-        return np.where(covered & ~self.use_tension, normal, t)
+    def __call__(self, x, w, g, intact=None, bonds=None) -> np.ndarray:
+        normal, _, covered, t = self._parts(x, w, g, intact, bonds)
+        use_tension = self.use_tension if bonds is None else self.use_tension[bonds]
+        return np.where(covered & ~use_tension, normal, t)
+
+    def lipschitz(self) -> np.ndarray:
+        """Per bond, how far its measure can move per unit of the largest elongation
+        change over its patch (the triangles at its end nodes), while the patch is
+        undamaged (n_bonds,): the normal measure ``a . s`` moves at most ``|a|_1`` times
+        the patch mean of ``|V_T diag(l_T) Q_T|_inf``; a tension at most the patch sum
+        of ``|Q_T|_inf``."""
+        sp_ = self.sp
+        total = sp_.patch_total(self.area)
+        covered = total > 0
+        mean = sp_.patch_total(sp_.q_norms(sp_.w, sp_.g, self.length)) / np.where(
+            covered, total, 1.0
+        )
+        normal = np.abs(self._a_normal).sum(axis=1) * mean
+        tension = sp_.patch_total(sp_.q_norms(sp_.w, sp_.g))
+        return np.where(covered & ~self.use_tension, normal, tension)
 
     def measure(self, x, w, g, intact=None):
         """``(normal, v, covered, t)`` of state ``x``: the normal measure (n_bonds,;
@@ -66,16 +83,21 @@ class Stress(Criterion):
         v = np.einsum("eij,ej->ei", self.unbias, s)
         return normal, np.where(covered[:, None], v, 0.0), covered, t
 
-    def _parts(self, x, w, g, intact=None):
+    def _parts(self, x, w, g, intact=None, bonds=None):
         """``(normal, s, covered, t)``: :meth:`measure`'s with the raw patch stress ``s``
-        (n_bonds, 3) in place of the unbiased one."""
-        f = self.sp.forces(x, w, g)
-        t = self.sp.tension(x, w, g, f)
-        s, covered = self.sp.patch_voigt(x, w, g, self.length, self.area, intact, f)
-        normal = np.einsum("ej,ej->e", self._a_normal, s)
+        (n_bonds, 3) in place of the unbiased one; of ``bonds`` (int array) only, if
+        given (the same numbers)."""
+        sl = slice(None) if bonds is None else bonds
+        if bonds is None:
+            f = self.sp.forces(x, w, g)
+            t = self.sp.tension(x, w, g, f)
+            s, covered = self.sp.patch_voigt(x, w, g, self.length, self.area, intact, f)
+        else:
+            t, s, covered = self.sp.local_measures(x, w, g, self.length, self.area, intact, bonds)
+        normal = np.einsum("ej,ej->e", self._a_normal[sl], s)
         if intact is not None and not intact.all():
-            along = np.einsum("ej,ej->e", self._a_h, s) - normal
-            normal = np.where(self._near_damage(intact), t - along, normal)
+            along = np.einsum("ej,ej->e", self._a_h[sl], s) - normal
+            normal = np.where(self._near_damage(intact)[sl], t - along, normal)
         return normal, s, covered, t
 
     def _near_damage(self, intact: np.ndarray) -> np.ndarray:

@@ -18,5 +18,13 @@ class Tension(Criterion):
     def thresholds(self, s_tension, ftb, factors):
         return s_tension
 
-    def __call__(self, x, w, g, intact=None):
+    def __call__(self, x, w, g, intact=None, bonds=None):
+        if bonds is not None:
+            return self.sp.local_measures(x, w, g, self.length, self.area, None, bonds)[0]
         return self.sp.tension(x, w, g, self.sp.forces(x, w, g))
+
+    def lipschitz(self):
+        """Per bond, how far its tension can move per unit of the largest elongation
+        change over its patch while the patch is undamaged: the patch sum of
+        ``|Q_T|_inf`` (n_bonds,)."""
+        return self.sp.patch_total(self.sp.q_norms(self.sp.w, self.sp.g))
