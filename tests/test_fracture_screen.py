@@ -126,8 +126,10 @@ def test_the_block_bound_covers_every_patch():
     at_node = sp_._at_node
     node = np.array([tri[at_node[i].indices].max() for i in range(model.mesh.n_points)])
     patch = np.maximum(node[sp_.ends[:, 0]], node[sp_.ends[:, 1]])
-    bound = scr._block_change(du)[scr.bond_block]
+    bound = scr._block_change(tri)[scr.bond_block]
     assert np.all(bound >= patch)
+    bonds = np.random.default_rng(3).choice(sp_.n_bonds, 100, replace=False)
+    assert np.array_equal(sp_.patch_max(tri, bonds), patch[bonds])
 
 
 def test_apply_columns_gives_the_solutions_as_rows():

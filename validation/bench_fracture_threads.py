@@ -10,8 +10,12 @@ events per second of the loop and the CPU seconds it used.
 
 Usage::
 
-    python validation/bench_fracture_threads.py           # h = 10 mm (5.0e3 nodes, CVT)
+    python validation/bench_fracture_threads.py           # 5.0e3, 9.8e3 and 9.6e4 nodes
     python validation/bench_fracture_threads.py --quick   # h = 20 mm (1.3e3 nodes)
+
+The sizes: h = 10 mm CVT (5,019 nodes, 1,500 events), and the two runs of
+``fracture.py``'s speed table, h = 7 mm (9,780 nodes, 300 events) and 2.2 mm (96,471
+nodes, 100 events), jittered.
 
 Writes ``validation/out/bench_fracture_threads.json`` and prints a table.
 """
@@ -36,7 +40,7 @@ import logging; logging.disable(logging.WARNING)
 from fracture import petersson_run
 threads = None if {threads!r} == "library" else 1
 t0 = time.process_time()
-res = petersson_run({h}, kind="cvt", max_events={events}, stop_load_ratio=0.0,
+res = petersson_run({h}, kind={kind!r}, max_events={events}, stop_load_ratio=0.0,
                     max_rank=240, blas_threads=threads)
 print(json.dumps({{"events": len(res.events), "loop_seconds": res.seconds.events,
                   "events_per_second": res.stats.events_per_second,
@@ -50,8 +54,13 @@ def _spin(stop) -> None:
         pass
 
 
-def run(h: float, events: int, threads: str, busy: bool) -> dict:
-    code = ONE_RUN.format(here=str(HERE), threads=threads, h=h, events=events)
+#: (h in mm, mesh kind, events) of the full and the quick run
+SIZES = ((10.0, "cvt", 1500), (7.0, "jittered", 300), (2.2, "jittered", 100))
+QUICK = ((20.0, "cvt", 400),)
+
+
+def run(h: float, kind: str, events: int, threads: str, busy: bool) -> dict:
+    code = ONE_RUN.format(here=str(HERE), threads=threads, h=h, kind=kind, events=events)
     stop = mp.Event()
     hog = mp.Process(target=_spin, args=(stop,)) if busy else None
     if hog is not None:
@@ -66,27 +75,30 @@ def run(h: float, events: int, threads: str, busy: bool) -> dict:
     if out.returncode != 0:
         raise RuntimeError(out.stderr)
     rec = json.loads(out.stdout.strip().splitlines()[-1])
-    return {"threads": threads, "machine": "busy" if busy else "quiet", **rec}
+    return {"threads": threads, "machine": "busy" if busy else "quiet", "h": h, "kind": kind, **rec}
 
 
 def main(argv=None) -> int:
     args = parser(__doc__).parse_args(argv)
-    h, events = (20.0, 400) if args.quick else (10.0, 1500)
     rows = []
-    for busy in (False, True):
-        for threads in ("library", "1"):
-            rows.append(run(h, events, threads, busy))
-            r = rows[-1]
-            print(
-                f"{r['machine']:6s} BLAS threads {r['threads']:8s} {r['nodes']:6d} nodes "
-                f"{r['events']:5d} events: {r['events_per_second']:7.1f} events/s, "
-                f"CPU {r['cpu_seconds']:6.2f} s",
-                flush=True,
-            )
-    data = {"quick": args.quick, "h": h, "rows": rows}
+    for h, kind, events in QUICK if args.quick else SIZES:
+        for busy in (False, True):
+            for threads in ("library", "1"):
+                rows.append(run(h, kind, events, threads, busy))
+                _print(rows[-1])
+    data = {"quick": args.quick, "sizes": QUICK if args.quick else SIZES, "rows": rows}
     out = write_json(data, args.out / "bench_fracture_threads.json")
     print(f"wrote {out}")
     return 0
+
+
+def _print(r: dict) -> None:
+    print(
+        f"{r['machine']:6s} BLAS threads {r['threads']:8s} {r['nodes']:6d} nodes "
+        f"{r['events']:5d} events: {r['events_per_second']:7.1f} events/s, "
+        f"CPU {r['cpu_seconds']:6.2f} s",
+        flush=True,
+    )
 
 
 if __name__ == "__main__":

@@ -262,6 +262,8 @@ def teeth_at(spring, peak, energy, n_teeth: int = 30):
         mid = 0.5 * (lo + hi)
         short = _teeth_energy(mid, n_teeth)[2] < tau
         lo, hi = np.where(short, mid, lo), np.where(short, hi, mid)
+        if np.array_equal(lo, hi):  # collapsed onto one number: no later step moves it
+            break
     d, x, _ = _teeth_energy(0.5 * (lo + hi), n_teeth)
     return d, dp[:, None] * x
 

@@ -236,6 +236,16 @@ class TriangleSplit:
         tb = self.tri_bonds
         return np.maximum(np.maximum(e[tb[:, 0]], e[tb[:, 1]]), e[tb[:, 2]])
 
+    def patch_max(self, values: np.ndarray, bonds: np.ndarray) -> np.ndarray:
+        """The largest of per-triangle ``values`` (M,) over each bond's patch (the
+        triangles at its two end nodes), for ``bonds`` (k,) int; shape (k,)."""
+        nodes, ends = np.unique(self.ends[bonds], return_inverse=True)
+        at = self._at_node
+        tris, starts = csr_rows(at.indptr, at.indices, nodes)
+        node = np.maximum.reduceat(values[tris], starts) if len(tris) else np.zeros(0)
+        ends = ends.reshape(-1, 2)
+        return np.maximum(node[ends[:, 0]], node[ends[:, 1]])
+
     @cached_property
     def _bond_elongations(self):
         """(n_bonds, 2N) CSR: every bond's elongation (the row of its first local edge:

@@ -172,8 +172,11 @@ class Criterion(ABC):
     def softening(self, x, bonds=None) -> np.ndarray:
         """What a cracked bond softens by: its elongation (length) per unit load factor,
         shape (n_bonds,); of ``bonds`` (int array) only, if given."""
-        op = self._elongation if bonds is None else self._elongation[bonds]
-        return op @ np.asarray(x).ravel()
+        x = np.asarray(x).ravel()
+        if bonds is None or len(self.bonds) < screen.MIN_BONDS:  # (a row slice costs
+            out = self._elongation @ x  # more than the whole product on a small lattice)
+            return out if bonds is None else out[bonds]
+        return self._elongation[bonds] @ x
 
     @cached_property
     def _elongation(self):

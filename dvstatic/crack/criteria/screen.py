@@ -126,7 +126,8 @@ class Screen:
         args = (criterion, xh, xg, w, g, intact, threshold)
         first = np.union1d(ref.must, dirty)
         if xh is None:  # bounds by blocks of bonds
-            upper = ref.r_b + ref.l_b * self._block_change(xg - ref.xg)
+            tri = self.sp.triangle_change(xg - ref.xg)
+            upper = ref.r_b + ref.l_b * self._block_change(tri)
             first = np.union1d(first, self._block_bonds(np.argmax(upper)))
         else:  # bond by bond (inf: the held part may leave no room)
             upper = self._upper(xh, xg, threshold)
@@ -134,8 +135,17 @@ class Screen:
             first = np.union1d(first, [int(np.argmax(np.where(upper < np.inf, upper, -1.0)))])
         rf, ef = self._exact(*args, first)
         best = max(floor, float(np.max(rf, where=intact_bonds[first], initial=0.0)))
-        more = np.flatnonzero(upper * (1.0 + SLACK) >= best * (1.0 - self.tie))
-        second = np.setdiff1d(self._block_bonds(more) if xh is None else more, first)
+
+        def reaching(bound):  # the bounds that reach the largest ratio (ties included)
+            return bound * (1.0 + SLACK) >= best * (1.0 - self.tie)
+
+        if xh is None:  # the bonds of those blocks, by their own patches' bounds
+            more = np.setdiff1d(self._block_bonds(np.flatnonzero(reaching(upper))), first)
+            change = self.sp.patch_max(tri, more)
+            own = (np.maximum(ref.vg[more], 0.0) + self.lip[more] * change) / threshold[more]
+            second = more[reaching(own)]
+        else:
+            second = np.setdiff1d(np.flatnonzero(reaching(upper)), first)
         if best <= 0 or len(first) + len(second) > REFRESH * n:
             return self._everything(criterion, xh, xg, w, g, intact, threshold, dirty)
         rs, es = self._exact(*args, second)
@@ -149,19 +159,20 @@ class Screen:
     def _upper(self, xh, xg, threshold) -> np.ndarray:
         """Upper bounds of every bond's ratio (n_bonds,) under held loads; inf where
         the held part's bound leaves no room below the threshold."""
-        ref = self.ref
-        vg = ref.vg + self.lip * self._block_change(xg - ref.xg)[self.bond_block]
-        room = threshold - (ref.vh + self.lip * self._block_change(xh - ref.xh)[self.bond_block])
+        ref, sp_, block = self.ref, self.sp, self.bond_block
+        vg = ref.vg + self.lip * self._block_change(sp_.triangle_change(xg - ref.xg))[block]
+        dh = self._block_change(sp_.triangle_change(xh - ref.xh))[block]
+        room = threshold - (ref.vh + self.lip * dh)
         upper = np.full(len(room), np.inf)
         ok = room > 0
         upper[ok] = np.maximum(vg[ok], 0.0) / room[ok]
         return upper
 
-    def _block_change(self, du: np.ndarray) -> np.ndarray:
+    def _block_change(self, tri: np.ndarray) -> np.ndarray:
         """Per block of bonds, a bound of every bond's largest elongation change over
-        its patch for the displacement change ``du``: the largest over the triangle
-        blocks the block's patches meet."""
-        t = self.sp.triangle_change(du)[self._tri_order]
+        its patch, from every triangle's (M,; :meth:`TriangleSplit.triangle_change`):
+        the largest over the triangle blocks the block's patches meet."""
+        t = tri[self._tri_order]
         t = np.r_[t, np.zeros(-len(t) % BLOCK)].reshape(-1, BLOCK).max(axis=1)
         indptr, indices = self._block_tris
         return np.maximum.reduceat(t[indices], indptr[:-1])
