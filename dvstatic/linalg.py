@@ -293,6 +293,7 @@ class DirectSolver:
         column's solution as a row (written into ``out`` (k, n), if given), the
         right-hand sides placed in the factor's order directly."""
         u = u.tocoo()
+        u.sum_duplicates()
         b = np.zeros(u.shape, order="F")
         b[u.row if self.order is None else self._inverse[u.row], u.col] = u.data
         x = self.lu.solve(b).T  # (k, n), C-contiguous (SuperLU answers in Fortran order)

@@ -231,3 +231,58 @@ def test_the_screen_finds_every_near_critical_bond_of_states_far_from_its_refere
         assert np.array_equal(ratio[near], full[near])
         assert _first_of_largest(ratio) == _first_of_largest(full)
     assert scr.screened >= 15 and TIE < 1e-3
+
+
+def test_a_criterion_that_redefines_its_value_is_not_screened(monkeypatch):
+    """A subclass of a screened criterion with a value of its own keeps no Lipschitz
+    constant made for its parent's value."""
+    monkeypatch.setattr(screen_mod, "MIN_BONDS", 0)
+    model = fracture_model(dv.DV(plate(0.1), E=E, nu=NU))
+    sp_ = split(model)
+
+    class Squared(Stress):
+        def __call__(self, x, w, g, intact=None, bonds=None):
+            return super().__call__(x, w, g, intact, bonds) ** 2
+
+    plain, own = Stress(model, sp_), Squared(model, sp_)
+    plain.prepare(model, FT, None, {})
+    own.prepare(model, FT, None, {})
+    assert plain.screen is not None and own.screen is None
+
+
+def test_past_refresh_the_screen_stops_and_the_events_stay(monkeypatch, screens):
+    """Once the bonds next to damage alone pass REFRESH, every bond, every event."""
+    monkeypatch.setattr(screen_mod, "REFRESH", 0.03)
+    mesh, sup = notched()
+    model = dv.DV(mesh, E=E, nu=NU)
+    kw = dict(ft=FT, gf=5e-4, teeth=3, max_events=60, stop_load_ratio=0.0)
+    fast = dv.fracture(model, sup, None, **kw)
+    (scr,) = screens
+    assert scr.off and scr.ref is None
+    unscreened(monkeypatch, Stress)
+    same_events(fast, dv.fracture(model, sup, None, **kw))
+
+
+def test_column_buffers_that_double_give_the_same_events(monkeypatch):
+    """Where the system will not map ``max_rank`` columns at once, the buffers grow."""
+    from dvstatic.crack import updates
+
+    mesh, sup = notched(0.06)
+    model = dv.DV(mesh, E=E, nu=NU)
+    kw = dict(ft=FT, gf=5e-4, max_events=80, stop_load_ratio=0.0)
+    lazy = dv.fracture(model, sup, None, **kw)
+
+    def refuse(rows, cols):
+        raise MemoryError("no")
+
+    monkeypatch.setattr(updates, "_lazy_rows", refuse)
+    same_events(lazy, dv.fracture(model, sup, None, **kw))
+
+
+def test_apply_columns_sums_duplicate_entries():
+    A = sp.csr_matrix(np.diag(np.arange(1.0, 7.0)))
+    engine = DirectSolver(A, order=np.arange(6)[::-1].copy())
+    u = sp.coo_matrix(
+        (np.array([1.0, 2.0, 3.0]), (np.array([2, 2, 4]), np.array([0, 0, 1]))), (6, 2)
+    )
+    np.testing.assert_allclose(engine.apply_columns(u), engine.apply(u.toarray()).T)

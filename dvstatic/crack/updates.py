@@ -135,7 +135,7 @@ class UpdatedSolver:
         if r > self.max_rank:
             self.stale = True
             return
-        self._room()
+        self._room(r)
         u_new = self._columns(new[first // 3], first % 3)
         zn = self.engine.apply_columns(u_new, out=self._zt[r_old:r])  # (new, 2N)
         self.columns_solved += len(bonds)
@@ -147,12 +147,22 @@ class UpdatedSolver:
         self.pos[bonds] = np.arange(r_old, r)
         self.bonds = np.concatenate([self.bonds, bonds])
 
-    def _room(self) -> None:
-        """The buffers of ``max_rank`` columns, made once (the memory of a row is only
-        taken when it is written)."""
-        if len(self._zt) < self.max_rank:
-            self._zt = _lazy_rows(self.max_rank, len(self.free))
-            self._wb = np.empty((self.max_rank, self.max_rank))
+    def _room(self, r: int) -> None:
+        """Room for ``r`` columns: the buffers of ``max_rank`` columns, made once (the
+        memory of a row is only taken when it is written); where the system will not
+        map that much at once, buffers that double as they fill (copied)."""
+        if r <= len(self._zt):
+            return
+        rank = self.rank
+        try:
+            zt = _lazy_rows(self.max_rank, len(self.free))
+        except MemoryError:
+            zt = np.empty((max(r, min(2 * len(self._zt), self.max_rank), 48), len(self.free)))
+        zt[:rank] = self._zt[:rank]
+        wb = np.empty((len(zt), len(zt)))
+        if rank:
+            wb[:rank, :rank] = self._wb[:rank, :rank]
+        self._zt, self._wb = zt, wb
 
     def _columns(self, tri: np.ndarray, k: np.ndarray):
         """U's columns (2N, len(tri)) CSC: the elongation gradients of the local edges
@@ -285,9 +295,14 @@ def _lazy_rows(rows: int, cols: int) -> np.ndarray:
 
     try:
         buf = mmap.mmap(-1, rows * cols * 8, flags=mmap.MAP_PRIVATE | mmap.MAP_ANONYMOUS)
-        buf.madvise(mmap.MADV_NOHUGEPAGE)
-    except (AttributeError, OSError, ValueError):  # no such map or advice here
+    except (AttributeError, ValueError):  # no such map here
         return np.empty((rows, cols))
+    except OSError as exc:  # (strict overcommit: not that much at once)
+        raise MemoryError(str(exc)) from None
+    try:
+        buf.madvise(mmap.MADV_NOHUGEPAGE)
+    except (AttributeError, OSError):  # no such advice here: the map serves as it is
+        pass
     return np.frombuffer(buf, dtype=float).reshape(rows, cols)
 
 

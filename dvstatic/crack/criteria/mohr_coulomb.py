@@ -9,7 +9,8 @@ import numpy as np
 
 from ...errors import InputError
 from ...stress.virial import continuum_stress, strain_operator
-from .base import linear_factors, register
+from .base import register
+from .ratios import linear_factors
 from .responses import per_bond
 from .stress import Stress
 

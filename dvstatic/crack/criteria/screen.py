@@ -8,7 +8,8 @@ in the state with a fixed operator, so it moved by at most its Lipschitz constan
 (:meth:`Criterion.lipschitz`) times the largest elongation change over its patch,
 ``|v_e(x) - v_e(x0)| <= L_e max_T |B_T (x - x0)|_inf``, which is bounded in turn by the
 largest change over the blocks of :data:`BLOCK` triangles (consecutive along a Morton
-curve) that the patches of its block of :data:`BLOCK` bonds meet. That gives an upper
+curve) that the patches of its block of :data:`BLOCK` bonds meet (without held loads,
+the candidates so found are then bounded by their own patches). That gives an upper
 bound of every bond's ratio; only the bonds whose bound reaches the largest ratio found
 exactly (ties included, :data:`TIE`) are evaluated, with the bonds next to damage (whose
 measure changes with it) and those the held part could overload. The result is exact:
@@ -16,8 +17,11 @@ every bond that could be critical or tie with it is evaluated, with the same sum
 whole lattice's (:meth:`~dvstatic.lattice.damage.TriangleSplit.local_measures`).
 
 Where more than :data:`REFRESH` of the bonds would need evaluating (the first event;
-the damage or the state moved far from the reference), every bond is evaluated and
-that state becomes the reference.
+the state moved far from the reference), every bond is evaluated and that state becomes
+the reference; once the bonds next to damage alone pass it, every bond is evaluated at
+every event (damage only grows). The bounds rest on one invariant of the event loop: an
+intact bond's threshold does not change (``Bonds.advance`` changes it only as it cracks
+the bond, and a cracked bond's patch is damaged).
 """
 
 from __future__ import annotations
@@ -55,7 +59,9 @@ class _Reference(NamedTuple):
     xg: np.ndarray  #: (2N,) growing part
     vh: np.ndarray | None  #: (n_bonds,) values of the held part
     vg: np.ndarray  #: (n_bonds,) values of the growing part
-    must: np.ndarray  #: bonds evaluated at every event (next to damage; no strength)
+    #: bonds evaluated at every event: next to damage then (and, without held loads,
+    #: those with no strength left; with held loads their bound says so)
+    must: np.ndarray
     r_b: np.ndarray | None  #: per bond block, the largest ratio (without held loads)
     l_b: np.ndarray | None  #: per bond block, the largest Lipschitz constant per threshold
 
@@ -82,6 +88,7 @@ class Screen:
         ends = sp_.ends
         self._node_bonds = _csr(ends.ravel(), np.repeat(np.arange(len(ends)), 2), sp_.n_nodes)
         self.ref: _Reference | None = None
+        self.off = False  # the damage passed REFRESH: every bond at every event
         self.full = 0  # evaluations of every bond
         self.screened = 0  # events that evaluated a part of them
         self.evaluated = 0  # bonds evaluated in the screened events
@@ -97,6 +104,7 @@ class Screen:
         tri_block[self._tri_order] = np.arange(m) // BLOCK
         self.n_tri_blocks = -(-m // BLOCK)
         e = len(sp_.ends)
+        self.n_bond_blocks = -(-e // BLOCK)
         self._bond_order = spatial_order(points[sp_.ends].mean(axis=1))
         bond_block = np.empty(e, dtype=np.int64)
         bond_block[self._bond_order] = np.arange(e) // BLOCK
@@ -109,7 +117,7 @@ class Screen:
         counts = np.diff(np.r_[starts, len(blocks)])
         nb = self.n_tri_blocks
         both = np.unique(np.repeat(pairs // n, counts) * nb + blocks)
-        self._block_tris = _csr(both // nb, both % nb, int(bond_block.max()) + 1)
+        self._block_tris = _csr(both // nb, both % nb, self.n_bond_blocks)
 
     def factors(self, criterion, xh, xg, w, g, intact, threshold, intact_bonds, floor: float):
         """``(ratio, excess)`` (n_bonds,) of a criterion linear in the state, exact at
@@ -119,9 +127,14 @@ class Screen:
         whose patch is undamaged are those of the reference (an intact bond's does not
         change)."""
         n = len(threshold)
+        if self.off:  # damage only grows: past REFRESH, every bond from here on
+            return self._all(criterion, xh, xg, w, g, intact, threshold)
         dirty = self._dirty(g, intact)
+        if len(dirty) > REFRESH * n:
+            self.off, self.ref = True, None
+            return self._all(criterion, xh, xg, w, g, intact, threshold)
         ref = self.ref
-        if ref is None or (xh is None) != (ref.xh is None) or len(dirty) > REFRESH * n:
+        if ref is None or (xh is None) != (ref.xh is None):
             return self._everything(criterion, xh, xg, w, g, intact, threshold, dirty)
         args = (criterion, xh, xg, w, g, intact, threshold)
         first = np.union1d(ref.must, dirty)
@@ -164,7 +177,7 @@ class Screen:
         dh = self._block_change(sp_.triangle_change(xh - ref.xh))[block]
         room = threshold - (ref.vh + self.lip * dh)
         upper = np.full(len(room), np.inf)
-        ok = room > 0
+        ok = room > SLACK * np.abs(threshold)  # (round-off within the bound's own)
         upper[ok] = np.maximum(vg[ok], 0.0) / room[ok]
         return upper
 
@@ -174,7 +187,7 @@ class Screen:
         the largest over the triangle blocks the block's patches meet."""
         t = tri[self._tri_order]
         t = np.r_[t, np.zeros(-len(t) % BLOCK)].reshape(-1, BLOCK).max(axis=1)
-        indptr, indices = self._block_tris
+        indptr, indices = self._block_tris  # (no row is empty: every bond has a triangle)
         return np.maximum.reduceat(t[indices], indptr[:-1])
 
     def _block_bonds(self, blocks) -> np.ndarray:
@@ -184,7 +197,7 @@ class Screen:
 
     def _by_block(self, values: np.ndarray, fill: float) -> np.ndarray:
         """The largest of ``values`` (n_bonds,) in every bond block."""
-        v = np.full(len(self._block_tris[0]) - 1, fill).repeat(BLOCK)
+        v = np.full(self.n_bond_blocks * BLOCK, fill)
         v[: len(values)] = values[self._bond_order]
         return v.reshape(-1, BLOCK).max(axis=1)
 
@@ -194,6 +207,12 @@ class Screen:
         vg = criterion(xg, w, g, intact, bonds)
         vh = 0.0 if xh is None else criterion(xh, w, g, intact, bonds)
         return linear_factors(vh, vg, threshold[bonds])
+
+    def _all(self, criterion, xh, xg, w, g, intact, threshold):
+        """Every bond, no reference kept."""
+        self.full += 1
+        vh = 0.0 if xh is None else criterion(xh, w, g, intact)
+        return linear_factors(vh, criterion(xg, w, g, intact), threshold)
 
     def _everything(self, criterion, xh, xg, w, g, intact, threshold, dirty):
         """Every bond, and this state as the reference."""
