@@ -4,6 +4,7 @@ the bonds that can be critical, and finds what evaluating every bond finds."""
 import numpy as np
 import pytest
 import scipy.sparse as sp
+from test_fracture import FT, NU, E, plate, pulled
 
 import dvstatic as dv
 from dvstatic.crack.criteria import criterion_for
@@ -13,17 +14,6 @@ from dvstatic.crack.criteria.tension import Tension
 from dvstatic.crack.sla import fracture_model
 from dvstatic.lattice.damage import split
 from dvstatic.linalg import DirectSolver, nested_dissection
-
-E, NU, FT = 3e4, 0.2, 3.0
-
-
-def plate(h=0.1, seed=1, kind="jittered"):
-    return dv.mesh.rectangle(2.0, 1.0, h, kind=kind, seed=seed)
-
-
-def pulled(scale=1.0):
-    sup = [dv.Fix(at=(0, 0), x=0, y=0), dv.Fix(at=(2, 0), y=0)]
-    return sup, [dv.Traction("right", (scale, 0.0)), dv.Traction("left", (-scale, 0.0))]
 
 
 def notched(h=0.05, kind="cvt"):
