@@ -34,8 +34,8 @@ __all__ = ["Criterion", "Critical", "REGISTRY", "register", "criterion_for", "MO
 TIE = 1e-9
 
 #: lattices with at least this many bonds take the softening of a few bonds from their
-#: rows, smaller ones from the whole product (Petersson's beam at 5,019 nodes, 14,000
-#: bonds: the row slices took 376 -> 331 events/s)
+#: rows, smaller ones from the whole product (Petersson's beam at 5,019 nodes, 14,592
+#: bonds: 331 events/s with row slices, 380 without; medians of paired runs)
 ROW_SLICE = 20_000
 
 #: failure modes of a bond, by the code :meth:`Criterion.factors` gives: tension (the

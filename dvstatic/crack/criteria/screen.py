@@ -38,8 +38,8 @@ __all__ = ["Screen", "REFRESH", "SLACK", "BLOCK", "MIN_BONDS"]
 
 #: lattices with fewer bonds evaluate every bond at every event (below about this size
 #: the screen's own work costs more than it saves: Petersson's beam at 9,780 nodes,
-#: 28,980 bonds, 178 -> 200 events/s with it; a 2 x 1 plate with held loads and closing
-#: cracks at 650 nodes 8.4 -> 10.8 s)
+#: 28,669 bonds, 178 -> 200 events/s with it; a 2 x 1 plate with held loads and closing
+#: cracks at 700 nodes 8.4 -> 10.8 s)
 MIN_BONDS = 20_000
 
 #: evaluate every bond (and take the state as the new reference) where the screen would
