@@ -250,6 +250,7 @@ def _model_summary(model) -> dict:
         ),
         "bonds": model.bonds,
         "boundary_cells": model.boundary_cells,
+        "anisotropy": model.anisotropy,
         "exact_cells": int(len(model.cell_triangles)),
         "cell_rings": CELL_RINGS if len(model.cell_triangles) else None,
         "k_n": model.k_n,

@@ -35,7 +35,12 @@ def setup(problem: str, model: str, nonlinear: bool):
     cls = dv.DV if model.startswith("DV") else dv.RV
     nu = 0.35 if model.startswith("DV") else 0.2
     # the defaults (relaxed, stabilised, surface bonds) unless the paper's model is asked
-    paper = {"calibration": "paper", "bonds": "uniform", "boundary_cells": "lattice"}
+    paper = {
+        "calibration": "paper",
+        "bonds": "uniform",
+        "boundary_cells": "lattice",
+        "anisotropy": "keep",
+    }
     kw = paper if model.endswith("paper") else {}
     if problem == "lined-bore":
         lining = dv.domain.Circle((0.0, 0.0), 0.55, name="lining")

@@ -11,7 +11,12 @@ from dvstatic.lattice.calibration import table
 from dvstatic.lattice.stabilise import MARGIN, triangle_modes
 
 E = 1e5
-PAPER = {"calibration": "paper", "bonds": "uniform", "boundary_cells": "lattice"}
+PAPER = {
+    "calibration": "paper",
+    "bonds": "uniform",
+    "boundary_cells": "lattice",
+    "anisotropy": "keep",
+}
 
 
 def _uniaxial_error(mesh, cls, nu, **kw):

@@ -11,7 +11,12 @@ from dvstatic.post import interpolate
 from dvstatic.problem import constraints
 
 #: the paper's model (calibrated under affine strain, uniform springs)
-PAPER = {"calibration": "paper", "bonds": "uniform", "boundary_cells": "lattice"}
+PAPER = {
+    "calibration": "paper",
+    "bonds": "uniform",
+    "boundary_cells": "lattice",
+    "anisotropy": "keep",
+}
 
 
 @pytest.fixture(scope="module")

@@ -140,25 +140,34 @@ def _gmsh_ring():
     return dv.Mesh(d["points"], d["triangles"], parts={"bore": d["bore"], "outer": d["outer"]})
 
 
-@pytest.mark.parametrize("cls", MODELS)
-def test_the_cells_cover_an_imported_meshs_disordered_boundary_zone(cls):
-    """The bore pressure on the gmsh ring in plane strain, against Lame's displacement
-    (rigid motion out): one layer of cells left it 4.15 % (DV) / 4.33 % (RV) off, the
-    four layers of the default 1.23 / 1.32 %."""
-    mesh = _gmsh_ring()
+def gmsh_ring_lame_error(model) -> float:
+    """The bore pressure on the gmsh ring (``model.mesh``) in plane strain, E = 1e4, nu =
+    0.3, held at three outer nodes: the relative L2 difference from Lame's displacement,
+    rigid motion out."""
+    mesh = model.mesh
     E, nu, p = 1e4, 0.3, 1.0
     r = np.hypot(*mesh.points.T)
     ur = (1 + nu) * p / 3 / E * ((1 - 2 * nu) * r + 1 / r)
     exact = mesh.points * (ur / r)[:, None]
     pins = [int(np.argmin(np.hypot(*(mesh.points - q).T))) for q in ((1, 0), (-1, 0), (0, 1))]
     sup = [dv.Fix(pins[:2], y=0.0), dv.Fix(pins[2:], x=0.0)]
+    sol = dv.solve(model, sup, dv.Pressure("bore", p))
+    return dv.compare(sol, exact, rigid=True).l2
+
+
+@pytest.mark.parametrize("cls", MODELS)
+def test_the_cells_cover_an_imported_meshs_disordered_boundary_zone(cls):
+    """The bore pressure on the gmsh ring in plane strain, against Lame's displacement
+    (rigid motion out): one layer of cells left it 4.15 % (DV) / 4.33 % (RV) off, the
+    four layers of the default 1.23 / 1.32 % (the regional isotropy kept out: it acts
+    on the lattice inside, test_isotropy.py)."""
+    mesh = _gmsh_ring()
     err = {}
     for rings in (CELL_RINGS, 0):
-        model = cls(mesh, E, nu, plane="strain")
+        model = cls(mesh, 1e4, 0.3, plane="strain", anisotropy="keep")
         if rings != CELL_RINGS:  # before the operator is built (a cached property)
             object.__setattr__(model, "cell_triangles", boundary_triangles(mesh, rings))
-        sol = dv.solve(model, sup, dv.Pressure("bore", p))
-        err[rings] = dv.compare(sol, exact, rigid=True).l2
+        err[rings] = gmsh_ring_lame_error(model)
     assert err[CELL_RINGS] < 0.016 and err[CELL_RINGS] < 0.4 * err[0], err
 
 

@@ -6,7 +6,12 @@ import dvstatic as dv
 from dvstatic.linalg import rigid_modes
 
 # the paper's model
-PAPER = {"calibration": "paper", "bonds": "uniform", "boundary_cells": "lattice"}
+PAPER = {
+    "calibration": "paper",
+    "bonds": "uniform",
+    "boundary_cells": "lattice",
+    "anisotropy": "keep",
+}
 
 MODELS = [dv.DV, dv.RV]
 

@@ -112,9 +112,14 @@ def test_patch_rows_equal_global_rows_with_the_defaults(cls):
     model = cls(mesh, 1e5, nu)
     assert model.micro.stabilised and model.clipped_fraction > 0
     assert len(model.cell_triangles) < 0.7 * mesh.n_triangles  # a lattice inside
+    assert_patch_rows_are_global(model)
+
+
+def assert_patch_rows_are_global(model, ranks: int = 3) -> None:
+    """The owned rows of every rank's patch model equal the whole model's rows."""
     K = model.stiffness()
-    for rank in range(3):
-        lay = distributed.layout(mesh, rank, 3)
+    for rank in range(ranks):
+        lay = distributed.layout(model.mesh, rank, ranks)
         pm = distributed.patch_model(model, lay)
         gd = np.stack([2 * lay.local_nodes, 2 * lay.local_nodes + 1], axis=1).reshape(-1)
         n2 = 2 * lay.n_owned

@@ -7,7 +7,12 @@ import dvstatic as dv
 from conftest import E_BEAM, NU, rel_l2, uniaxial_exact, uniaxial_problem
 
 # the paper's model
-PAPER = {"calibration": "paper", "bonds": "uniform", "boundary_cells": "lattice"}
+PAPER = {
+    "calibration": "paper",
+    "bonds": "uniform",
+    "boundary_cells": "lattice",
+    "anisotropy": "keep",
+}
 
 
 def _uniaxial_error(cls, h, kind="lattice", solver="direct"):

@@ -45,15 +45,20 @@ def _uniform(case: str):
     )
 
 
-@pytest.mark.parametrize("kind", ["lattice", "jittered", "cvt", "random"])
+@pytest.mark.parametrize("kind", ["lattice", "jittered", "cvt", "random", "imported"])
 @pytest.mark.parametrize("case", ["uniaxial", "biaxial", "shear"])
 def test_uniform_stress_is_exact_at_every_node(kind, case):
     """Rows next to loaded and supported edges and the corners included (the 2026-12
-    recovery: 7-10 % bias next to the edges, sxy = -1 at the loaded corner)."""
-    mesh = dv.mesh.rectangle(2.0, 1.0, 0.05, kind=kind, seed=1)
+    recovery: 7-10 % bias next to the edges, sxy = -1 at the loaded corner); "imported":
+    a CVT mesh without its recipe, with the regional isotropy."""
+    mesh = dv.mesh.rectangle(2.0, 1.0, 0.05, kind=kind.replace("imported", "cvt"), seed=1)
+    if kind == "imported":
+        mesh = dv.Mesh(mesh.points, mesh.triangles, parts=mesh.parts)
     sup, loads, target = _uniform(case)
     for cls in (dv.DV, dv.RV):
-        s = dv.solve(cls(mesh, E, NU), sup, loads).stress()
+        model = cls(mesh, E, NU)
+        assert model.anisotropy == ("regional" if kind == "imported" else "keep")
+        s = dv.solve(model, sup, loads).stress()
         assert np.abs(s - target).max() < 1e-7
 
 

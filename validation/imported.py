@@ -1,8 +1,9 @@
 """Imported meshes (issue 28): gmsh meshes, uniform and graded, read with
 ``dv.io.read_mesh`` and calibrated from their local micro-structure.
 
-Problems (each at two refinements, DV and RV with the default springs and with
-``bonds="fabric"``, against P2 FE on the same triangles):
+Problems (each at two refinements, DV and RV with the defaults (the surface springs and
+the regional isotropy), without the regional isotropy (``anisotropy="keep"``, the
+defaults before it) and with ``bonds="fabric"``, against P2 FE on the same triangles):
 
 * the 10 x 10 plate with a hole of radius 0.5 in uniaxial tension 1 (rollers on the
   left): far-field sxx (r > 3) against P2's there (mean and scatter), the relative L2
@@ -38,8 +39,13 @@ from _common import parser, write_json
 import dvstatic as dv
 
 #: the models compared: DV and RV with the default springs and with the fabric-corrected
-#: ones (``bonds="fabric"``)
-MODELS = [(cls, bonds) for bonds in ("surface", "fabric") for cls in (dv.DV, dv.RV)]
+#: ones (``bonds="fabric"``), each with the regional isotropy (the default on imported
+#: meshes, ``anisotropy="regional"``) and without it (``"keep"``)
+MODELS = [
+    (cls, bonds, anisotropy)
+    for bonds, anisotropy in (("surface", "regional"), ("surface", "keep"), ("fabric", "keep"))
+    for cls in (dv.DV, dv.RV)
+]
 
 
 def _gmsh():
@@ -143,8 +149,8 @@ def plate_rows(path: Path, label: str) -> list[dict]:
     s_ref = ref.stress(mesh.points)
     top = int(np.argmin(np.hypot(*(mesh.points - (0.0, 0.5)).T)))
     rows = []
-    for cls, bonds in MODELS:
-        model = cls(mesh, 1e4, 0.3, bonds=bonds)
+    for cls, bonds, aniso in MODELS:
+        model = cls(mesh, 1e4, 0.3, bonds=bonds, anisotropy=aniso)
         sol = dv.solve(model, sup, loads)
         s = sol.stress()
         rows.append(
@@ -152,6 +158,7 @@ def plate_rows(path: Path, label: str) -> list[dict]:
                 "problem": f"plate with a hole, {label}",
                 "model": cls.kind,
                 "bonds": bonds,
+                "anisotropy": aniso,
                 "nodes": mesh.n_points,
                 "sigma_L": mesh.edge_length_spread(),
                 "local_spread": model.micro.details.get("local_spread_sample"),
@@ -182,8 +189,8 @@ def ring_rows(path: Path, label: str) -> list[dict]:
     bore = mesh.part_nodes("bore")
     t = np.c_[-mesh.points[bore, 1], mesh.points[bore, 0]] / 0.5
     rows = []
-    for cls, bonds in MODELS:
-        model = cls(mesh, E, nu, plane="strain", bonds=bonds)
+    for cls, bonds, aniso in MODELS:
+        model = cls(mesh, E, nu, plane="strain", bonds=bonds, anisotropy=aniso)
         sol = dv.solve(model, sup, dv.Pressure("bore", p))
         hoop = np.einsum("ni,nij,nj->n", t, sol.stress()[bore], t) / (1.25 / 0.75) - 1
         rows.append(
@@ -191,6 +198,7 @@ def ring_rows(path: Path, label: str) -> list[dict]:
                 "problem": f"thick cylinder, {label}",
                 "model": cls.kind,
                 "bonds": bonds,
+                "anisotropy": aniso,
                 "nodes": mesh.n_points,
                 "l2_exact": dv.compare(sol, exact, rigid=True).l2,
                 "hoop_rms": float(np.sqrt(np.mean(hoop**2))),
@@ -221,13 +229,15 @@ def cook_rows(path: Path, label: str) -> list[dict]:
     sup, loads = [dv.Fix("left")], [dv.Traction("right", (0.0, 100.0 / 16.0))]
     tip = int(np.argmin(np.hypot(*(mesh.points - (48.0, 60.0)).T)))
     rows = []
-    for cls, bonds in MODELS:
-        sol = dv.solve(cls(mesh, 70.0, 1.0 / 3.0, plane="strain", bonds=bonds), sup, loads)
+    for cls, bonds, aniso in MODELS:
+        model = cls(mesh, 70.0, 1.0 / 3.0, plane="strain", bonds=bonds, anisotropy=aniso)
+        sol = dv.solve(model, sup, loads)
         rows.append(
             {
                 "problem": f"Cook's membrane, {label}",
                 "model": cls.kind,
                 "bonds": bonds,
+                "anisotropy": aniso,
                 "nodes": mesh.n_points,
                 "tip_error": float(sol.u[tip, 1] / COOK_TIP - 1),
             }

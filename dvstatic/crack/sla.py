@@ -75,16 +75,20 @@ def _state(solver, w, g, control, ref, f, fh=None):
 
 def fracture_model(model: VoronoiModel) -> VoronoiModel:
     """The lattice ``dv.fracture`` breaks: ``model`` itself, or, where it has exact
-    boundary cells, the same lattice with ``boundary_cells="lattice"`` (module
-    docstring: the cells have no softening law)."""
-    if model.boundary_cells != "exact" or not len(model.cell_triangles):
+    boundary cells or the regional isotropy's terms, the same lattice with
+    ``boundary_cells="lattice", anisotropy="keep"`` (module docstring: the cells have no
+    softening law, nor has the regional term, which acts as a cell's does)."""
+    cells = model.boundary_cells == "exact" and len(model.cell_triangles)
+    if not cells and model.anisotropy != "regional":
         return model
     log.info(
-        "fracture: the %d exact boundary cells are given back to the plain lattice "
-        "(boundary_cells='lattice'): cells have no softening law",
-        len(model.cell_triangles),
+        "fracture: the %d exact boundary cells and the regional isotropy (%s) are given "
+        "back to the plain lattice (boundary_cells='lattice', anisotropy='keep'): neither "
+        "has a softening law",
+        len(model.cell_triangles) if model.boundary_cells == "exact" else 0,
+        model.anisotropy,
     )
-    return model.replaced(boundary_cells="lattice")
+    return model.replaced(boundary_cells="lattice", anisotropy="keep")
 
 
 def _check_start(model, start) -> None:

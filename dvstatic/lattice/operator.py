@@ -296,12 +296,11 @@ class LatticeOperator:
             else:
                 _, dr = half_sides(y, self._bary(sl), grad=True)
             q = q + self.coupling[sl, None, None] * dr
-        ke = np.matmul(b.transpose(0, 2, 1), q)
-        if self.cells is not None:
+        if self.cells is not None:  # the cells' bond matrices on the elongations
             loc = self._cell_of[sl]
             at = np.flatnonzero(loc >= 0)
-            bc = b[at]
-            ke[at] += np.matmul(bc.transpose(0, 2, 1), np.matmul(self.cell_dq[loc[at]], bc))
+            q[at] += np.matmul(self.cell_dq[loc[at]], b[at])
+        ke = np.matmul(b.transpose(0, 2, 1), q)
         if tension is not None:
             s = g.tri_weight[sl] * tension[tri_bonds] / length
             proj = np.eye(2) - n[..., :, None] * n[..., None, :]

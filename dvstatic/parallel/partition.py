@@ -250,9 +250,10 @@ def patch_model(model, lay: Layout, micros: tuple | None = None):
     """``model`` on the rank's patch, with what reaches beyond the patch's two rings
     read from the whole (replicated) mesh: the spring weights
     (:func:`patch_bond_weights`), the exact cells (the whole mesh's boundary triangles
-    :data:`~dvstatic.lattice.cells.CELL_RINGS` rings deep, not the patch's cut) and a
-    class-by-class calibration's micro-parameters. ``micros``: one MicroParameters per
-    material (default: the model's)."""
+    :data:`~dvstatic.lattice.cells.CELL_RINGS` rings deep, not the patch's cut), a
+    class-by-class calibration's micro-parameters and the regional isotropy's field
+    (:mod:`dvstatic.lattice.isotropy`: a region reaches 12 passes of neighbours).
+    ``micros``: one MicroParameters per material (default: the model's)."""
     micros = model.micros if micros is None else tuple(micros)
     pm = type(model)(
         lay.patch,
@@ -264,6 +265,7 @@ def patch_model(model, lay: Layout, micros: tuple | None = None):
         thickness=model.thickness,
         materials={k: (m.E, m.nu) for k, m in model.materials.items()},
         boundary_cells=model.boundary_cells,
+        anisotropy=model.anisotropy,
     )
     object.__setattr__(pm, "bond_weight", patch_bond_weights(model, lay))  # cached
     tri_global = patch_triangles(model.mesh, lay)
@@ -272,6 +274,9 @@ def patch_model(model, lay: Layout, micros: tuple | None = None):
     object.__setattr__(pm, "cell_triangles", np.flatnonzero(is_cell[tri_global]))
     if model.micro_field is not None:  # a mesh calibrated class by class
         object.__setattr__(pm, "micro_field", model.micro_field.restricted(tri_global))
+    if model.anisotropy == "regional":  # regions reach beyond the patch: the whole's
+        whole = model if model.is_calibrated else model.replaced_calibration(micros)
+        object.__setattr__(pm, "anisotropy_field", whole.anisotropy_field[tri_global])
     return pm
 
 

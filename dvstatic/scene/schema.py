@@ -190,7 +190,7 @@ SCHEMA: dict[str, F] = {
                 "boundary bonds: no stiff surface layer), fabric (surface springs with "
                 "the local anisotropy of the cells taken out), uniform (the paper's k_n) "
                 "or voronoi (k_n sqrt(3) r/l). The paper's model: calibration = paper, "
-                "bonds = uniform, boundary_cells = lattice",
+                "bonds = uniform, boundary_cells = lattice, anisotropy = keep",
                 default="auto",
                 choices=("auto", "surface", "fabric", "uniform", "voronoi"),
             ),
@@ -204,6 +204,16 @@ SCHEMA: dict[str, F] = {
                 "uniform, boundary_cells = lattice",
                 default="exact",
                 choices=("exact", "lattice"),
+            ),
+            "anisotropy": F(
+                "string",
+                "regional (every lattice triangle takes out the anisotropy of its "
+                "region's mean tensor, which a mesher's graded cells leave), keep (the "
+                "lattice's tensors as they are) or auto (regional on imported meshes and the "
+                "generators' graded cvt meshes, keep on the others). The paper's model: "
+                "anisotropy = keep",
+                default="auto",
+                choices=("auto", "regional", "keep"),
             ),
         },
     ),

@@ -57,6 +57,7 @@ def companion(model: VoronoiModel, material: int) -> VoronoiModel:
             plane=model.plane,
             thickness=model.thickness,
             boundary_cells=model.boundary_cells,
+            anisotropy=model.anisotropy,
         )
         cache[material].share_calibration_flags(model)
     return cache[material]

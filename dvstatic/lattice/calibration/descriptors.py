@@ -146,12 +146,13 @@ def deep_nodes(mesh: Mesh, rings: int) -> np.ndarray:
 
 
 def ring_mean(mesh: Mesh, node_values: np.ndarray, rings: int) -> np.ndarray:
-    """``node_values`` (N,) averaged ``rings`` times over every node and its
-    neighbours, shape (N,)."""
+    """``node_values`` (N,) or (N, k) averaged ``rings`` times over every node and its
+    neighbours, same shape."""
     node = np.asarray(node_values, dtype=float)
     if rings:
         step = mesh.topology.ring_step(mesh.n_points)
         deg = np.asarray(step.sum(axis=1)).ravel()
+        deg = deg if node.ndim == 1 else deg[:, None]
         for _ in range(rings):
             node = (step @ node) / deg
     return node
