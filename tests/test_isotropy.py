@@ -65,6 +65,21 @@ def test_auto_takes_it_where_it_was_measured_to_help():
         dv.DV(imported, 1e3, 0.3, anisotropy="remove")
 
 
+def test_random_points_take_no_term():
+    """Random points' regions are noise the relaxation does not follow (a disc of them
+    in a lattice came out 8.6 % stiff with the term): above a local spread of
+    RANDOM_SPREAD they keep the lattice's tensors, even without a recipe."""
+    mesh = _imported(dv.mesh.rectangle(2.0, 1.0, 0.05, kind="random", seed=1))
+    model = dv.DV(mesh, 1e3, 0.3)
+    assert model.anisotropy == "regional"
+    keep = dv.DV(mesh, 1e3, 0.3, anisotropy="keep")
+    assert abs(model.stiffness() - keep.stiffness()).max() == 0.0
+    jittered = _imported(dv.mesh.rectangle(2.0, 1.0, 0.05, kind="jittered", seed=1))
+    assert len(isotropy.corrected_triangles(jittered, np.zeros(0, dtype=int))) > 0.9 * (
+        jittered.n_triangles
+    )
+
+
 def test_a_region_is_averaged_within_its_material():
     """A stiff material's anisotropy does not reach the triangles of another: with
     isotropic tensors on the left half and anisotropic ones on the right, the left
@@ -119,10 +134,11 @@ def test_the_gmsh_ring_lame_displacement(cls):
 
 @pytest.mark.parametrize("cls", MODELS)
 def test_the_term_never_softens_a_triangle_below_half(cls, monkeypatch):
-    """Random points without recipe (slivers, obtuse triangles; 422 nodes): every
+    """A lattice jittered by 0.4 without recipe (obtuse triangles; 997 nodes): every
     corrected triangle keeps ``Q_T + dQ_T >= KEEP Q_T``, where the raw term would take
-    some of them below (15 of 151 measured), and the lattice solves."""
-    mesh = _imported(dv.mesh.rectangle(2.0, 1.0, 0.08, kind="random", seed=3))
+    some of them below (6 / 7 of 737 measured, DV / RV), and the lattice solves."""
+    base = dv.mesh.rectangle(2.0, 1.0, 0.05, kind="jittered", jitter=0.4, seed=3)
+    mesh = _imported(base)
     model = cls(mesh, 1e3, 0.3)
     spring, coupling = model._intact
     take = isotropy.corrected_triangles(mesh, model.cell_triangles)
@@ -138,7 +154,7 @@ def test_the_term_never_softens_a_triangle_below_half(cls, monkeypatch):
 
     assert lowest(isotropy.regional_corrections(*args)).min() > -1e-9
     monkeypatch.setattr(isotropy, "KEEP", -np.inf)  # no bound: the raw term
-    assert np.sum(lowest(isotropy.regional_corrections(*args)) < -1e-3) >= 5
+    assert np.sum(lowest(isotropy.regional_corrections(*args)) < -1e-3) >= 3
     monkeypatch.undo()
     sol = dv.solve(model, [dv.Fix("left")], dv.Traction("right", (1.0, 0.0)))
     assert np.isfinite(sol.u).all()

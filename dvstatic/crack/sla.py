@@ -81,12 +81,12 @@ def fracture_model(model: VoronoiModel) -> VoronoiModel:
     cells = model.boundary_cells == "exact" and len(model.cell_triangles)
     if not cells and model.anisotropy != "regional":
         return model
+    what = [f"the {len(model.cell_triangles)} exact boundary cells"] if cells else []
+    what += ["the regional isotropy's terms"] if model.anisotropy == "regional" else []
     log.info(
-        "fracture: the %d exact boundary cells and the regional isotropy (%s) are given "
-        "back to the plain lattice (boundary_cells='lattice', anisotropy='keep'): neither "
-        "has a softening law",
-        len(model.cell_triangles) if model.boundary_cells == "exact" else 0,
-        model.anisotropy,
+        "fracture: %s given back to the plain lattice (boundary_cells='lattice', "
+        "anisotropy='keep'): no softening law",
+        " and ".join(what),
     )
     return model.replaced(boundary_cells="lattice", anisotropy="keep")
 

@@ -19,22 +19,26 @@ projection on the isotropic tensors. It acts as an exact cell's term does
 (:mod:`dvstatic.lattice.cells`): a bond matrix ``dQ_T = A_T E_T^-T (-D_R) E_T^-1`` on
 the triangle's three elongations. It keeps what the calibration set (every triangle's
 isotropic part) and the triangle-to-triangle fluctuations (the lattice's
-micro-structure); only the regional mean's anisotropy goes.
+micro-structure), and takes out the regional mean's anisotropy at the window's scale
+(a second pass of the same average still finds part of it: what varies within a
+window).
 
 Where the term would soften a triangle below half of its own bond matrix (``Q_T +
-dQ_T`` not above ``Q_T / 2``: :data:`KEEP`) it is scaled down, so the lattice stays as
-stable as it was; exact cells (already isotropic) and slivers
-(:data:`~dvstatic.lattice.cells.CELL_SINE`) take no term.
+dQ_T`` not above ``Q_T / 2``: :data:`KEEP`) it is scaled down, so every triangle stays
+positive definite (its lowest eigenvalue at least halved); exact cells (already
+isotropic), slivers (:data:`~dvstatic.lattice.cells.CELL_SINE`) and patches of random
+points take no term and no part in the averages.
 
 Default (``"auto"``, :func:`default_anisotropy`) where it was measured to help: meshes
 without a generator recipe (imported; gmsh plates, rings and Cook's membranes:
 validation/imported.py) and the generators' graded CVT meshes (the tunnel example at
-h_near = 0.0125, seeds 0-3: wall hoop rms 1.77 -> 0.66 %, worst node 4.5 -> 1.9 %, with
-the surface springs in place of the fabric's). Not on the package's uniform meshes,
-isotropic by construction, where a region's anisotropy is noise that the relaxation
-does not follow (Lame at 2e4 nodes, two seeds: jittered L2 0.100 -> 0.097 % but bore
-worst node 0.41 -> 0.62 %; random points L2 0.61 -> 1.44 %), nor on graded random points
-(tunnel wall rms 3.8 -> 6.0 %).
+h_near = 0.0125, seeds 0-3: wall hoop rms 1.77 -> 0.88 %, worst node 4.5 -> 2.3 %, with
+their fabric springs). Not on the package's uniform meshes, isotropic by construction,
+where a region's anisotropy is noise that the relaxation does not follow (Lame at 2e4
+nodes, two seeds: jittered L2 0.100 -> 0.097 % but bore worst node 0.41 -> 0.62 %;
+random points L2 0.61 -> 1.26 %), nor on graded random points (tunnel wall rms 3.8 ->
+6.0 % with the surface springs), nor, within any mesh, on patches of random points
+(:data:`RANDOM_SPREAD`).
 """
 
 from __future__ import annotations
@@ -43,14 +47,17 @@ import numpy as np
 
 from ..mesh import Mesh
 from . import geometry as _geometry
-from .calibration.descriptors import ring_mean
+from .calibration.descriptors import ring_mean, spread_field
 from .cells import CELL_SINE, unit_elongations
 
 __all__ = [
     "ANISOTROPY",
     "REGION_RINGS",
     "KEEP",
+    "RANDOM_SPREAD",
+    "corrected_triangles",
     "default_anisotropy",
+    "resolve_anisotropy",
     "isotropic_part",
     "regional_anisotropy",
     "regional_corrections",
@@ -62,6 +69,12 @@ ANISOTROPY = ("auto", "regional", "keep")
 REGION_RINGS = 12
 #: the term never takes a triangle's bond matrix below this fraction of its own
 KEEP = 0.5
+#: triangles whose local spread (over 4 rings) is larger take no term: random points
+#: (0.26-0.44, 0.1 to 99.9 percentiles), where a region's anisotropy is noise that the
+#: relaxation does not follow (a disc of random points in a lattice came out 8.6 % stiff
+#: with it); CVT 0.06-0.16, lattices jittered by 0.3 0.11-0.22 (0.45: 0.16-0.30), gmsh
+#: cells up to 0.09
+RANDOM_SPREAD = 0.25
 
 _M = np.array([1.0, 1.0, 0.0])
 _J = np.outer(_M, _M) / 2.0  # the bulk projector (Mandel)
@@ -99,7 +112,8 @@ def regional_anisotropy(
     material: np.ndarray | None = None,
     rings: int = REGION_RINGS,
 ) -> np.ndarray:
-    """The anisotropic part of every triangle's regional mean tensor, shape (M, 3, 3).
+    """The anisotropic part of the regional mean tensor of every triangle of
+    ``lattice``, shape (M, 3, 3) (zero elsewhere).
 
     Parameters
     ----------
@@ -107,27 +121,26 @@ def regional_anisotropy(
     tensors : ndarray, shape (M, 3, 3)
         Every triangle's tensor (Mandel, units of E).
     lattice : ndarray of int, shape (k,)
-        The triangles whose anisotropy counts (:func:`corrected_triangles`): the
-        others count as isotropic, the exact cells since they are, the slivers since
-        their near-singular tensors (up to 1 / sine^2) would swamp their region.
+        The triangles that take the term (:func:`corrected_triangles`); a region is
+        averaged over these alone: the exact cells are isotropic by construction,
+        slivers' near-singular tensors (up to 1 / sine^2) and random points' noise
+        would swamp their neighbours'.
     material : ndarray of int, shape (M,), optional
         Every triangle's material: a region is averaged within its triangle's
         material (a stiff inclusion's anisotropy is not a soft matrix's).
     rings : int
         Passes of the neighbour average.
     """
-    dev = np.zeros_like(tensors)
-    dev[lattice] = tensors[lattice] - isotropic_part(tensors[lattice])
-    material = np.zeros(len(dev), dtype=np.int64) if material is None else material
+    take = np.zeros(len(tensors), dtype=bool)
+    take[lattice] = True
+    material = np.zeros(len(tensors), dtype=np.int64) if material is None else material
+    dev = tensors - isotropic_part(tensors)
     out = np.zeros_like(dev)
-    for k in np.unique(material):
-        mine = material == k
+    for k in np.unique(material[take]):
+        mine = take & (material == k)
         node, touched = _node_means(mesh, dev, mine)
-        if not mine.all():  # the mean over the material's own nodes only
-            node = ring_mean(mesh, node * touched[:, None], rings)
-            node /= np.maximum(ring_mean(mesh, touched, rings), 1e-300)[:, None]
-        else:
-            node = ring_mean(mesh, node, rings)
+        node = ring_mean(mesh, node * touched[:, None], rings)
+        node /= np.maximum(ring_mean(mesh, touched, rings), 1e-300)[:, None]
         out[mine] = node[mesh.triangles[mine]].mean(axis=1).reshape(-1, 3, 3)
     return out
 
@@ -147,19 +160,31 @@ def _node_means(mesh: Mesh, dev: np.ndarray, mine: np.ndarray):
 def regional_corrections(
     mesh: Mesh, idx: np.ndarray, anisotropy: np.ndarray, tensors: np.ndarray
 ) -> np.ndarray:
-    """Bond matrices ``dQ_T`` (k, 3, 3) that take ``anisotropy`` (k, 3, 3, Mandel) out
-    of triangles ``idx``, each scaled so that ``Q_T + dQ_T >= KEEP Q_T``; ``tensors``
-    (k, 3, 3) the triangles' own ``C_T`` (units of E). None where ``C_T`` is not
+    """Bond matrices ``dQ_T`` (k, 3, 3) that take ``anisotropy`` out of triangles
+    ``idx``, each scaled so that ``Q_T + dQ_T >= KEEP Q_T``; none where ``C_T`` is not
     positive definite (as under the paper's unstabilised couplings).
 
+    Parameters
+    ----------
+    mesh : Mesh
+    idx : ndarray of int, shape (k,)
+        The triangles (:func:`corrected_triangles`).
+    anisotropy : ndarray, shape (k, 3, 3)
+        Their regional anisotropy (:func:`regional_anisotropy`; Mandel, units of E).
+    tensors : ndarray, shape (k, 3, 3)
+        Their own tensors ``C_T`` (Mandel, units of E).
+
+    Notes
+    -----
     The bound is read in strain space: ``dQ_T`` and ``Q_T`` are ``A E_T^-T (.) E_T^-1``
     of ``-anisotropy`` and ``C_T``, so their generalised eigenvalues are those of
-    ``-anisotropy`` against ``C_T``."""
+    ``-anisotropy`` against ``C_T``.
+    """
     c = 0.5 * (tensors + tensors.transpose(0, 2, 1))
     definite = _positive_definite(c)
     c[~definite] = np.eye(3)
-    low = np.linalg.inv(np.linalg.cholesky(c))
-    lam = np.linalg.eigvalsh(-low @ anisotropy @ low.transpose(0, 2, 1))[:, 0]
+    chol_inv = np.linalg.inv(np.linalg.cholesky(c))
+    lam = np.linalg.eigvalsh(-chol_inv @ anisotropy @ chol_inv.transpose(0, 2, 1))[:, 0]
     factor = np.where(definite, np.minimum(1.0, (1.0 - KEEP) / np.maximum(-lam, 1e-300)), 0.0)
     e_inv = np.linalg.inv(unit_elongations(mesh, idx))
     area = _geometry.of(mesh).tri_area[idx] * factor
@@ -176,8 +201,10 @@ def _positive_definite(c: np.ndarray) -> np.ndarray:
 
 
 def corrected_triangles(mesh: Mesh, cells: np.ndarray) -> np.ndarray:
-    """The triangles that take the regional term: all but the exact ``cells`` and the
-    slivers (:data:`~dvstatic.lattice.cells.CELL_SINE`), shape (k,) int."""
+    """The triangles that take the regional term, shape (k,) int: all but the exact
+    ``cells``, the slivers (:data:`~dvstatic.lattice.cells.CELL_SINE`) and patches of
+    random points (a local spread over 4 rings above :data:`RANDOM_SPREAD`)."""
     take = _geometry.smallest_sine(_geometry.of(mesh)) >= CELL_SINE
+    take &= spread_field(mesh, 4)[mesh.triangles].mean(axis=1) <= RANDOM_SPREAD
     take[cells] = False
     return np.flatnonzero(take)

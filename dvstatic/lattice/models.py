@@ -181,6 +181,12 @@ class VoronoiModel:
         object.__setattr__(self, "bonds", resolve_bonds(self.bonds, self.mesh))
         check_choice("anisotropy", self.anisotropy, ANISOTROPY)
         object.__setattr__(self, "anisotropy", resolve_anisotropy(self.anisotropy, self.mesh))
+        if self.anisotropy == "regional" and self.mesh.is_periodic:
+            raise InputError(
+                "anisotropy='regional' is for bodies, not periodic samples (the samples "
+                "calibrate the lattice as it is): use 'keep' or 'auto'",
+                "anisotropy",
+            )
         check_choice("boundary_cells", self.boundary_cells, BOUNDARY_CELLS)
         if self.thickness is not None:
             object.__setattr__(self, "thickness", check_positive("thickness", self.thickness))
@@ -438,6 +444,7 @@ class VoronoiModel:
         """Forces and matrices of this lattice (its calibrated stiffnesses, times the
         thickness; stabilised couplings clipped per triangle; the exact cells' and the
         regional isotropy's terms)."""
+        self.calibration_flags  # noqa: B018 (warned once, where the calibration is used)
         spring, coupling = self._intact
         cells, dq = self._triangle_terms(spring, coupling)
         if self.damage is not None:  # as lattice.damage.TriangleSplit.factors does
@@ -463,7 +470,6 @@ class VoronoiModel:
         """The intact springs (n_bonds,) and stabilised couplings (M,), times the
         thickness (force / length)."""
         mat = self.material_of_triangle
-        self.calibration_flags  # noqa: B018 (warned once, where the calibration is used)
         if len(self.micros) == 1 and self.micro_field is None:
             k_n, nu_m = self.micro.k_n, self.micro.nu_m
             spring = self.t * k_n * self.bond_weight
@@ -487,7 +493,7 @@ class VoronoiModel:
             idx.append(cells)
             terms.append(self._cell_dq(spring, coupling))
         if self.anisotropy == "regional":
-            take = corrected_triangles(self.mesh, cells)
+            take = self.regional_triangles
             idx.append(take)
             terms.append(self._regional_terms(take, spring, coupling))
         if not idx or not sum(len(i) for i in idx):
@@ -500,7 +506,7 @@ class VoronoiModel:
         distributed patch reads the whole mesh's)."""
         tensors = triangle_tensors(self.mesh, spring, coupling, self.barycentric_images)
         if "anisotropy_field" not in self.__dict__:
-            field = regional_anisotropy(self.mesh, tensors, take, self.material_of_triangle)
+            field = regional_anisotropy(self.mesh, tensors, take, self.region_partition)
             object.__setattr__(self, "anisotropy_field", field)  # the cached_property
         return regional_corrections(self.mesh, take, self.anisotropy_field[take], tensors[take])
 
@@ -508,12 +514,25 @@ class VoronoiModel:
     def anisotropy_field(self) -> np.ndarray:
         """The anisotropic part of every triangle's regional mean tensor (M, 3, 3,
         Mandel, units of E times the thickness) that ``anisotropy="regional"`` takes
-        out (:mod:`dvstatic.lattice.isotropy`; the exact cells and the slivers count as
-        isotropic)."""
+        out (:mod:`dvstatic.lattice.isotropy`; zero on the triangles that take no term:
+        exact cells, slivers, random points)."""
         spring, coupling = self._intact
         tensors = triangle_tensors(self.mesh, spring, coupling, self.barycentric_images)
-        take = corrected_triangles(self.mesh, self.cell_triangles)
-        return regional_anisotropy(self.mesh, tensors, take, self.material_of_triangle)
+        take, parts = self.regional_triangles, self.region_partition
+        return regional_anisotropy(self.mesh, tensors, take, parts)
+
+    @cached_property
+    def regional_triangles(self) -> np.ndarray:
+        """The triangles that take the regional isotropy's term, shape (k,) int (all but
+        the exact cells, slivers and random points: :func:`.isotropy.corrected_triangles`)."""
+        return corrected_triangles(self.mesh, self.cell_triangles)
+
+    @cached_property
+    def region_partition(self) -> np.ndarray:
+        """The parts (M,) int within which the regional isotropy averages: the
+        materials (a companion of one material, as the stress recovery builds, takes
+        its model's)."""
+        return self.material_of_triangle
 
     @cached_property
     def cell_triangles(self) -> np.ndarray:

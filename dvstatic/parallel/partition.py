@@ -277,6 +277,9 @@ def patch_model(model, lay: Layout, micros: tuple | None = None):
     if model.anisotropy == "regional":  # regions reach beyond the patch: the whole's
         whole = model if model.is_calibrated else model.replaced_calibration(micros)
         object.__setattr__(pm, "anisotropy_field", whole.anisotropy_field[tri_global])
+        takes = np.zeros(model.mesh.n_triangles, dtype=bool)
+        takes[whole.regional_triangles] = True  # read over 4 rings: the whole's too
+        object.__setattr__(pm, "regional_triangles", np.flatnonzero(takes[tri_global]))
     return pm
 
 

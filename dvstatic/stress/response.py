@@ -59,6 +59,8 @@ def companion(model: VoronoiModel, material: int) -> VoronoiModel:
             boundary_cells=model.boundary_cells,
             anisotropy=model.anisotropy,
         )
+        # the model's regions: averaged within its materials, not the companion's one
+        object.__setattr__(cache[material], "region_partition", model.region_partition)
         cache[material].share_calibration_flags(model)
     return cache[material]
 
