@@ -136,7 +136,7 @@ class VoronoiModel:
         anisotropy of its region's mean tensor (a window about 2.3 spacings wide),
         which a mesher's graded or front-aligned cells leave in an isotropic material
         (:mod:`dvstatic.lattice.isotropy`; a gmsh ring graded towards its bore, 17,060
-        nodes: Lame displacement 0.91 -> 0.26 %); the calibrated isotropic part and the
+        nodes: Lame displacement 0.91 -> 0.24 %); the calibrated isotropic part and the
         triangle-to-triangle fluctuations stay. ``"keep"``: the lattice's tensors as
         they are (the paper). ``"auto"`` (default): ``"regional"`` on meshes without a
         generator recipe (imported) and on the generators' graded CVT meshes (with
