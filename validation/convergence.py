@@ -34,7 +34,7 @@ import time
 
 import numpy as np
 from _benchmarks import beam, cantilever, cook, kirsch, lame, uniaxial
-from _common import parser, rel_l2, write_json
+from _common import PAPER, parser, rel_l2, write_json
 
 NODES = (1_000, 4_000, 16_000, 64_000)
 QUICK_NODES = (300, 1_200)
@@ -42,8 +42,8 @@ NUS = (-0.3, 0.0, 0.2, 0.33, 0.45)
 LATTICES = {
     "DV": ("DV", {}),
     "RV": ("RV", {}),
-    "DV paper": ("DV", {"calibration": "paper", "bonds": "uniform", "boundary_cells": "lattice"}),
-    "RV paper": ("RV", {"calibration": "paper", "bonds": "uniform", "boundary_cells": "lattice"}),
+    "DV paper": ("DV", PAPER),
+    "RV paper": ("RV", PAPER),
 }
 FE = {"P1": 1, "P2": 2}
 
