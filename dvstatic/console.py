@@ -37,6 +37,8 @@ def _model_line(md: dict) -> str:
     txt += f"; {_SPRINGS.get(md['bonds'], md['bonds'] + ' springs')}"
     if md.get("exact_cells"):
         txt += f"; {md['exact_cells']} exact boundary cells"
+    if md.get("anisotropy") == "regional":
+        txt += "; regional isotropy"
     txt += ")"
     classes = md.get("calibration_classes")
     if classes:  # k_n, nu_m above: the largest class's

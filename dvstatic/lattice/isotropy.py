@@ -32,7 +32,7 @@ points take no term and no part in the averages.
 Default (``"auto"``, :func:`default_anisotropy`) where it was measured to help: meshes
 without a generator recipe (imported; gmsh plates, rings and Cook's membranes:
 validation/imported.py) and the generators' graded CVT meshes (the tunnel example at
-h_near = 0.0125, seeds 0-3: wall hoop rms 1.77 -> 0.88 %, worst node 4.5 -> 2.3 %, with
+h_near = 0.0125, seeds 0-3: wall hoop rms 1.77 -> 0.85 %, worst node 4.5 -> 2.3 %, with
 their fabric springs). Not on the package's uniform meshes, isotropic by construction,
 where a region's anisotropy is noise that the relaxation does not follow (Lame at 2e4
 nodes, two seeds: jittered L2 0.100 -> 0.097 % but bore worst node 0.41 -> 0.62 %;

@@ -141,7 +141,7 @@ class VoronoiModel:
         they are (the paper). ``"auto"`` (default): ``"regional"`` on meshes without a
         generator recipe (imported) and on the generators' graded CVT meshes (with
         their fabric springs: the tunnel example's wall at h_near = 0.0125, seeds 0-3,
-        hoop rms 1.77 -> 0.88 %), ``"keep"`` on the
+        hoop rms 1.77 -> 0.85 %), ``"keep"`` on the
         package's uniform meshes (isotropic by construction) and graded random points
         (their regions' anisotropy is noise the term amplifies); ``model.anisotropy``
         holds the choice made.
