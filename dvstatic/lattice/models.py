@@ -144,7 +144,8 @@ class VoronoiModel:
         hoop rms 1.77 -> 0.85 %), ``"keep"`` on the
         package's uniform meshes (isotropic by construction) and graded random points
         (their regions' anisotropy is noise the term amplifies); ``model.anisotropy``
-        holds the choice made.
+        holds the choice made, which ``dataclasses.replace`` keeps (pass
+        ``anisotropy="auto"`` again with another mesh).
 
     Raises
     ------
