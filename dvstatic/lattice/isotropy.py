@@ -188,7 +188,7 @@ def regional_corrections(
     factor = np.where(definite, np.minimum(1.0, (1.0 - KEEP) / np.maximum(-lam, 1e-300)), 0.0)
     e_inv = np.linalg.inv(unit_elongations(mesh, idx))
     area = _geometry.of(mesh).tri_area[idx] * factor
-    dq = -area[:, None, None] * np.einsum("mki,mkl,mlj->mij", e_inv, anisotropy, e_inv)
+    dq = -area[:, None, None] * (e_inv.transpose(0, 2, 1) @ anisotropy @ e_inv)
     return 0.5 * (dq + dq.transpose(0, 2, 1))
 
 

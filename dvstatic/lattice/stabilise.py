@@ -198,4 +198,4 @@ def triangle_tensors(mesh: Mesh, spring: np.ndarray, coupling, barycentric: bool
     )[:, None, None] * coupling_matrices(mesh, barycentric)
     nm = np.stack([n[..., 0] ** 2, n[..., 1] ** 2, np.sqrt(2.0) * n[..., 0] * n[..., 1]], -1)
     lnm = length[..., None] * nm  # (M, 3 bonds, 3 strain components)
-    return np.einsum("mki,mkj,mjl->mil", lnm, q, lnm) / g.tri_area[:, None, None]
+    return (lnm.transpose(0, 2, 1) @ q @ lnm) / g.tri_area[:, None, None]
