@@ -37,6 +37,7 @@ log = logging.getLogger(__name__)
 
 __all__ = [
     "read_mesh",
+    "write_mesh",
     "write_vtu",
     "write_bonds_vtu",
     "summary",
@@ -146,6 +147,63 @@ def _surface_regions(m, phys, surfaces: dict[int, str]) -> dict[str, np.ndarray]
             out.setdefault(name, []).append(offset + np.flatnonzero(tags == tag))
         offset += len(block.data)
     return {k: np.concatenate(v) for k, v in out.items()}
+
+
+def write_mesh(path: str | Path, mesh: Mesh) -> Path:
+    """Write a mesh as gmsh 2.2 (``.msh``), atomically, so that :func:`read_mesh` gives
+    it back: the same points and triangles in the same order, every boundary part a
+    physical line group of its name, every region a physical surface group of its name
+    (the triangles of no region a group ``"body"``). gmsh opens it too. A mesh read
+    back has no generator recipe: it is calibrated and corrected as an imported mesh
+    (local spread, regional isotropy).
+
+    Raises
+    ------
+    ValueError
+        A suffix other than ``.msh``, a periodic mesh, or a part and a region of the
+        same name.
+    """
+    import meshio
+
+    path = Path(path)
+    if path.suffix != ".msh":
+        raise InputError(f"write_mesh writes gmsh files (.msh), got {path.name!r}", "path")
+    if mesh.is_periodic:
+        raise InputError("a periodic mesh has no gmsh form (its images are lost)", "mesh")
+    tri_tag, field = _surface_tags(mesh)
+    lines, line_tags = [], []
+    for name, edges in mesh.parts.items():
+        if name in field:
+            raise InputError(f"part and region of the same name {name!r}", "mesh")
+        field[name] = np.array([len(field) + 1, 1])
+        lines.append(np.asarray(edges, dtype=np.int64))
+        line_tags.append(np.full(len(edges), field[name][0]))
+    cells = ([("line", np.vstack(lines))] if lines else []) + [("triangle", mesh.triangles)]
+    tags = ([np.concatenate(line_tags)] if lines else []) + [tri_tag]
+    out = meshio.Mesh(
+        np.c_[mesh.points, np.zeros(mesh.n_points)],
+        cells,
+        cell_data={"gmsh:physical": tags, "gmsh:geometrical": tags},
+        field_data=field,
+    )
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = atomic_path(path)
+    meshio.write(tmp, out, file_format="gmsh22", binary=False)
+    return _finish(tmp, path)
+
+
+def _surface_tags(mesh: Mesh) -> tuple[np.ndarray, dict]:
+    """Every triangle's physical surface tag (M,) and the groups' field data."""
+    tag = np.zeros(mesh.n_triangles, dtype=np.int64)
+    field: dict[str, np.ndarray] = {}
+    for name, idx in mesh.regions.items():  # disjoint (Mesh refuses overlaps)
+        field[name] = np.array([len(field) + 1, 2])
+        tag[idx] = field[name][0]
+    if not tag.all():
+        name = "body" if "body" not in field else "body_rest"
+        field[name] = np.array([len(field) + 1, 2])
+        tag[tag == 0] = field[name][0]
+    return tag, field
 
 
 def write_vtu(path: str | Path, solution, stress: bool = True, fe=None) -> Path:

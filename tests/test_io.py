@@ -128,6 +128,32 @@ def test_gmsh_physical_surfaces_become_regions_with_their_materials(tmp_path):
     assert sol.reactions[mesh.part_nodes("pull"), 0].sum() == pytest.approx(force, rel=0.03)
 
 
+def test_write_mesh_round_trip_keeps_parts_and_regions(tmp_path):
+    """A .vtu round trip loses the boundary names (a new user's finding); write_mesh's
+    gmsh file keeps points, triangles (in order), parts and regions."""
+    base = dv.mesh.rectangle(2.0, 1.0, 0.1, kind="cvt", seed=1)
+    half = np.flatnonzero(base.points[base.triangles].mean(axis=1)[:, 0] > 1.0)
+    mesh = dv.Mesh(base.points, base.triangles, parts=base.parts, regions={"half": half})
+    back = io.read_mesh(io.write_mesh(tmp_path / "m.msh", mesh))
+    assert np.array_equal(back.points, mesh.points)
+    assert np.array_equal(back.triangles, mesh.triangles)
+    assert set(back.parts) == set(mesh.parts)
+    for name, edges in mesh.parts.items():
+        assert {tuple(e) for e in np.sort(edges, axis=1)} == {
+            tuple(e) for e in np.sort(back.parts[name], axis=1)
+        }
+    assert np.array_equal(np.sort(back.regions["half"]), half)
+    assert len(back.regions["body"]) == mesh.n_triangles - len(half)
+    assert [p.name for p in tmp_path.iterdir()] == ["m.msh"]  # no temporary left
+    with pytest.raises(dv.InputError, match=".msh"):
+        io.write_mesh(tmp_path / "m.vtu", mesh)
+    same = dv.Mesh(mesh.points, mesh.triangles, parts=mesh.parts, regions={"left": half})
+    with pytest.raises(dv.InputError, match="same name 'left'"):
+        io.write_mesh(tmp_path / "s.msh", same)
+    with pytest.raises(dv.InputError, match="periodic"):
+        io.write_mesh(tmp_path / "p.msh", dv.mesh.periodic_square(100, seed=1))
+
+
 def test_read_mesh_errors(tmp_path):
     with pytest.raises(ValueError, match="mesh file not found"):
         io.read_mesh(tmp_path / "none.msh")
