@@ -83,11 +83,7 @@ def fracture_model(model: VoronoiModel) -> VoronoiModel:
         return model
     what = [f"the {len(model.cell_triangles)} exact boundary cells"] if cells else []
     what += ["the regional isotropy's terms"] if model.anisotropy == "regional" else []
-    log.info(
-        "fracture: %s given back to the plain lattice (boundary_cells='lattice', "
-        "anisotropy='keep'): no softening law",
-        " and ".join(what),
-    )
+    log.info("fracture: %s given back to the plain lattice: no softening law", " and ".join(what))
     return model.replaced(boundary_cells="lattice", anisotropy="keep")
 
 

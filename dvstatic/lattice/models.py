@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import dataclasses
 import logging
-from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import cached_property
 from typing import TYPE_CHECKING, ClassVar
@@ -33,17 +32,13 @@ from ..material import Elastic
 from ..mesh import Mesh
 from . import calibration
 from . import geometry as _geometry
-from .cells import BOUNDARY_CELLS, cell_corrections, cell_tensors, exact_cells, isotropic_tensor
+from .cells import BOUNDARY_CELLS, cell_tensors
 from .flags import model_flags
-from .isotropy import (
-    ANISOTROPY,
-    corrected_triangles,
-    regional_anisotropy,
-    regional_corrections,
-    resolve_anisotropy,
-)
+from .inputs import checked_damage, checked_materials
+from .isotropy import ANISOTROPY, resolve_anisotropy
 from .operator import RESIDUAL, LatticeOperator
 from .stabilise import clip_coupling, triangle_modes, triangle_tensors
+from .terms import TriangleTerms
 from .weights import BONDS, bond_weights, mixed_springs, resolve_bonds, voronoi_weights
 
 if TYPE_CHECKING:  # annotations only: scipy is imported where it is used
@@ -56,7 +51,7 @@ __all__ = ["DV", "RV", "VoronoiModel", "voronoi_weights", "BONDS", "check_model"
 
 
 @dataclass(frozen=True, eq=False)
-class VoronoiModel:
+class VoronoiModel(TriangleTerms):
     """Common base of :class:`DV` and :class:`RV` (not used directly).
 
     Parameters
@@ -191,58 +186,15 @@ class VoronoiModel:
         check_choice("boundary_cells", self.boundary_cells, BOUNDARY_CELLS)
         if self.thickness is not None:
             object.__setattr__(self, "thickness", check_positive("thickness", self.thickness))
-        object.__setattr__(self, "materials", self._checked_materials())
-        self._check_damage()
+        object.__setattr__(self, "materials", checked_materials(self.materials, self))
+        damage, closed = checked_damage(self.damage, self.closed, self.mesh.n_bonds)
+        object.__setattr__(self, "damage", damage)
+        object.__setattr__(self, "closed", closed)
         self._check_calibration()
         if not launched_under_mpi():
             _ = self.micro  # calibrate now: an impossible nu fails at construction
         # under mpiexec the calibration waits: solver="petsc" computes it from sums
         # over each rank's own bonds (set_micro), so no rank needs the global geometry
-
-    def _checked_materials(self) -> dict[str, Elastic]:
-        if self.materials is None:
-            return {}
-        if not isinstance(self.materials, Mapping):
-            raise TypeError("materials must map region names to (E, nu)")
-        out = {}
-        for name, value in self.materials.items():
-            if name not in self.mesh.regions:
-                known = ", ".join(repr(k) for k in self.mesh.regions) or "none"
-                raise InputError(
-                    f"materials: unknown region {name!r}; the mesh's regions: {known}",
-                    "materials",
-                )
-            if isinstance(value, Elastic):
-                value = (value.E, value.nu)
-            try:
-                E, nu = value
-            except (TypeError, ValueError):
-                raise TypeError(f"materials[{name!r}] must be (E, nu), got {value!r}") from None
-            out[str(name)] = Elastic(E, nu, self.plane)
-        return out
-
-    def _check_damage(self) -> None:
-        if self.damage is None:
-            if self.closed is not None:
-                raise InputError("closed applies to a damaged lattice: give damage", "closed")
-            return
-        d = np.array(self.damage, dtype=float)  # a copy: the model owns it
-        if d.shape != (self.mesh.n_bonds,):
-            raise InputError(
-                f"damage must have one factor per bond, shape ({self.mesh.n_bonds},), got "
-                f"{d.shape}",
-                "damage",
-            )
-        if not np.all((d >= 0) & (d <= 1)):
-            raise InputError("damage factors must lie in [0, 1] (1 intact, 0 broken)", "damage")
-        d.setflags(write=False)
-        object.__setattr__(self, "damage", d)
-        if self.closed is not None:
-            c = np.array(self.closed, dtype=bool)
-            if c.shape != d.shape:
-                raise InputError(f"closed must have one flag per bond, got {c.shape}", "closed")
-            c.setflags(write=False)
-            object.__setattr__(self, "closed", c if c.any() else None)
 
     def damaged(self, stiffness: np.ndarray, closed=None) -> VoronoiModel:
         """This lattice with bond stiffness factors ``stiffness`` (n_bonds,; 1 intact, 0
@@ -484,71 +436,6 @@ class VoronoiModel:
             modes = triangle_modes(self.mesh, spring, self.barycentric_images)
             coupling = np.where(stab, clip_coupling(modes, coupling), coupling)
         return spring, coupling
-
-    def _triangle_terms(self, spring, coupling) -> tuple[np.ndarray | None, np.ndarray | None]:
-        """The triangles with a bond-matrix term and their terms (k, 3, 3): the exact
-        cells, then the triangles the regional isotropy corrects; (None, None) if none."""
-        idx, terms = [], []
-        cells = self.cell_triangles
-        if len(cells):
-            idx.append(cells)
-            terms.append(self._cell_dq(spring, coupling))
-        if self.anisotropy == "regional":
-            take = self.regional_triangles
-            idx.append(take)
-            terms.append(self._regional_terms(take, spring, coupling))
-        if not idx or not sum(len(i) for i in idx):
-            return None, None
-        return np.concatenate(idx), np.concatenate(terms)
-
-    def _regional_terms(self, take, spring, coupling) -> np.ndarray:
-        """The regional isotropy's bond matrices (k, 3, 3) of triangles ``take``; the
-        field computed on the way (once: it needs the same tensors) unless set (a
-        distributed patch reads the whole mesh's)."""
-        tensors = triangle_tensors(self.mesh, spring, coupling, self.barycentric_images)
-        if "anisotropy_field" not in self.__dict__:
-            field = regional_anisotropy(self.mesh, tensors, take, self.region_partition)
-            object.__setattr__(self, "anisotropy_field", field)  # the cached_property
-        return regional_corrections(self.mesh, take, self.anisotropy_field[take], tensors[take])
-
-    @cached_property
-    def anisotropy_field(self) -> np.ndarray:
-        """The anisotropic part of every triangle's regional mean tensor (M, 3, 3,
-        Mandel, units of E times the thickness) that ``anisotropy="regional"`` takes
-        out (:mod:`dvstatic.lattice.isotropy`; zero on the triangles that take no term:
-        exact cells, slivers, random points)."""
-        spring, coupling = self._intact
-        tensors = triangle_tensors(self.mesh, spring, coupling, self.barycentric_images)
-        take, parts = self.regional_triangles, self.region_partition
-        return regional_anisotropy(self.mesh, tensors, take, parts)
-
-    @cached_property
-    def regional_triangles(self) -> np.ndarray:
-        """The triangles that take the regional isotropy's term, shape (k,) int (all but
-        the exact cells, slivers and random points: :func:`.isotropy.corrected_triangles`)."""
-        return corrected_triangles(self.mesh, self.cell_triangles)
-
-    @cached_property
-    def region_partition(self) -> np.ndarray:
-        """The parts (M,) int within which the regional isotropy averages: the
-        materials (a companion of one material, as the stress recovery builds, takes
-        its model's)."""
-        return self.material_of_triangle
-
-    @cached_property
-    def cell_triangles(self) -> np.ndarray:
-        """The exact cells (``boundary_cells="exact"``, :func:`.cells.exact_cells`), shape
-        (k,) int; empty with ``"lattice"`` or on periodic meshes."""
-        if self.boundary_cells == "lattice":
-            return np.zeros(0, dtype=np.int64)
-        return exact_cells(self.mesh)
-
-    def _cell_dq(self, spring: np.ndarray, coupling: np.ndarray) -> np.ndarray:
-        """The exact cells' bond matrices (k, 3, 3) for the intact springs and couplings."""
-        cells = self.cell_triangles
-        tensors = np.stack([isotropic_tensor(*m.in_plane) for m in self.all_materials])
-        c = self.t * tensors[self.material_of_triangle[cells]]
-        return cell_corrections(self.mesh, cells, spring, coupling, self.barycentric_images, c)
 
     @cached_property
     def clipped_fraction(self) -> float:
