@@ -443,6 +443,7 @@ def _validate(args: argparse.Namespace) -> int:
         d / "elastica.py",
         d / "convergence.py",
         d / "stress.py",
+        d / "refinement.py",
         d / "fracture.py",
     ]
     if args.only:

@@ -195,6 +195,19 @@ def test_stress_quick(out):
     assert all(abs(r["first_break_over_ft"] - 1) < 0.02 for r in d["tension"])
 
 
+@pytest.mark.slow  # about 40 s: validation/refinement.py --quick
+def test_refinement_quick(out):
+    _run("refinement", out)
+    d = json.loads((out / "refinement.json").read_text())
+    studies = {(s["problem"], s["kind"]): s for s in d["studies"]}
+    assert len(studies) == 12 and d["seeds"] == [0, 1]
+    for kind in ("jittered", "cvt", "random"):
+        for problem in ("cook", "cantilever"):  # 1e3 -> 4e3 nodes: the mean error falls
+            assert studies[problem, kind]["falls"], (problem, kind)
+        for problem in ("LE1", "Kirsch"):  # about 4e3 nodes, every seed
+            assert studies[problem, kind]["rows"][-1]["max_abs"] < 0.1, (problem, kind)
+
+
 @pytest.mark.slow
 def test_compression(out):
     _run("compression", out)
