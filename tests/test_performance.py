@@ -74,3 +74,74 @@ def test_newton_preconditioner_rebuilt_at_most_once_per_step():
     steps = sol.info.steps
     assert all(s.iterations <= 5 for s in steps)
     assert sol.info.tangent_builds <= len(steps)
+
+
+def _dense_in_polygon(v, p):
+    """The even-odd test against every edge (the code before the sorted sweep)."""
+    w = np.roll(v, -1, axis=0)
+    x, y = p[:, 0:1], p[:, 1:2]
+    cond = (v[None, :, 1] > y) != (w[None, :, 1] > y)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        xc = v[None, :, 0] + (y - v[None, :, 1]) * (w[None, :, 0] - v[None, :, 0]) / (
+            w[None, :, 1] - v[None, :, 1]
+        )
+    return (np.count_nonzero(cond & (x < xc), axis=1) % 2) == 1
+
+
+def test_in_polygon_tests_only_the_edges_a_ray_can_cross():
+    """The sorted sweep gives the all-edges answer, on polygons and points that share
+    coordinates (points on vertices' heights, horizontal edges) too."""
+    from dvstatic.mesh.polygons import in_polygon
+
+    rng = np.random.default_rng(7)
+    for trial in range(120):
+        v = rng.random((int(rng.integers(3, 30)), 2))
+        p = rng.random((300, 2))
+        if trial % 2:  # a grid: shared heights, horizontal and collinear edges
+            v, p = np.round(v * 4) / 4, np.round(p * 8) / 8
+        np.testing.assert_array_equal(in_polygon(v, p), _dense_in_polygon(v, p))
+    assert in_polygon(v, np.zeros((0, 2))).shape == (0,)
+
+
+def _ellipse_domain():
+    return dv.domain.Domain(
+        dv.domain.Path(
+            (
+                dv.domain.Line((2.0, 0.0), (3.25, 0.0), "bottom"),
+                dv.domain.EllipseArc((0.0, 0.0), 3.25, 2.75, 0.0, 0.0, 90.0, "outer"),
+                dv.domain.Line((0.0, 2.75), (0.0, 1.0), "left"),
+                dv.domain.EllipseArc((0.0, 0.0), 2.0, 1.0, 0.0, 90.0, 0.0, "inner"),
+            )
+        ),
+        regions=[dv.domain.Circle((2.0, 1.5), 0.3, "disc")],
+    )
+
+
+def test_distance_beyond_a_reach_is_only_bounded():
+    """Points certainly farther than the reach get inf (their exact distance is beyond
+    it), every other point its exact distance: the mesher's tests ``d > reach`` come out
+    as with every distance computed."""
+    from dvstatic.mesh.generators import _distance_to_boundary
+
+    domain = _ellipse_domain()
+    p = np.random.default_rng(3).random((4000, 2)) * (3.3, 2.8)
+    exact = _distance_to_boundary(domain, p)
+    for reach in (1e-9, 0.02, 0.2, np.full(len(p), 0.05)):
+        d = _distance_to_boundary(domain, p, reach)
+        near = np.isfinite(d)
+        np.testing.assert_array_equal(d[near], exact[near])
+        assert np.all(exact[~near] > reach if np.ndim(reach) == 0 else exact[~near] > 0.05)
+        assert np.array_equal(d > reach, exact > reach)
+        assert 0 < near.sum() < len(p)
+
+
+def test_cvt_mesh_on_curves_unchanged_by_the_distance_bound(monkeypatch):
+    """A CVT mesh of an ellipse domain with a region is the same, to the last bit, with
+    every distance computed exactly (the bound switched off)."""
+    from dvstatic.mesh import generators
+
+    domain = _ellipse_domain()
+    fast = dv.mesh.generate(domain, 0.08, kind="cvt", seed=4).points
+    monkeypatch.setattr(generators, "_boundary_bound", lambda d, p, reach: np.full(len(p), -1.0))
+    slow = dv.mesh.generate(domain, 0.08, kind="cvt", seed=4).points
+    np.testing.assert_array_equal(fast, slow)

@@ -202,10 +202,14 @@ def test_refinement_quick(out):
     studies = {(s["problem"], s["kind"]): s for s in d["studies"]}
     assert len(studies) == 12 and d["seeds"] == [0, 1]
     for kind in ("jittered", "cvt", "random"):
-        for problem in ("cook", "cantilever"):  # 1e3 -> 4e3 nodes: the mean error falls
+        for problem in ("cook", "cantilever"):
+            # 1e3 -> 4e3 nodes: the mean error falls, and at 4e3 every seed is within
+            # 2 % (largest 1.40 %: the cantilever on random points; a lattice 10 % too
+            # stiff gives 9.7 %)
             assert studies[problem, kind]["falls"], (problem, kind)
-        for problem in ("LE1", "Kirsch"):  # about 4e3 nodes, every seed
-            assert studies[problem, kind]["rows"][-1]["max_abs"] < 0.1, (problem, kind)
+            assert studies[problem, kind]["rows"][-1]["max_abs"] < 0.02, (problem, kind)
+        for problem in ("LE1", "Kirsch"):  # about 4e3 nodes, every seed (largest 5.7 %)
+            assert studies[problem, kind]["rows"][-1]["max_abs"] < 0.07, (problem, kind)
 
 
 @pytest.mark.slow

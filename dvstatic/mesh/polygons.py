@@ -22,15 +22,25 @@ def are_edges(tri: np.ndarray, pairs: np.ndarray, n: int) -> np.ndarray:
 
 
 def in_polygon(v: np.ndarray, p: np.ndarray) -> np.ndarray:
-    """Even-odd point-in-polygon test, (n,) bool (points on edges are ambiguous)."""
+    """Even-odd point-in-polygon test, (n,) bool (points on edges are ambiguous).
+
+    An edge can only be crossed by the rays of the points whose ``y`` lies in its
+    ``[min y, max y)``: with the points sorted by ``y`` those are a contiguous run, so
+    only (edge, point) pairs of those runs are tested (about two per point for a loop,
+    instead of every edge against every point); the crossing is the same arithmetic."""
+    p = np.asarray(p, dtype=float).reshape(-1, 2)
     w = np.roll(v, -1, axis=0)
-    x, y = p[:, 0:1], p[:, 1:2]
-    cond = (v[None, :, 1] > y) != (w[None, :, 1] > y)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        xc = v[None, :, 0] + (y - v[None, :, 1]) * (w[None, :, 0] - v[None, :, 0]) / (
-            w[None, :, 1] - v[None, :, 1]
-        )
-    return (np.count_nonzero(cond & (x < xc), axis=1) % 2) == 1
+    order = np.argsort(p[:, 1], kind="stable")
+    ys = p[order, 1]
+    start = np.searchsorted(ys, np.minimum(v[:, 1], w[:, 1]), side="left")
+    counts = np.searchsorted(ys, np.maximum(v[:, 1], w[:, 1]), side="left") - start
+    e = np.repeat(np.arange(len(v)), counts)
+    run = np.arange(int(counts.sum())) - np.repeat(np.cumsum(counts) - counts, counts)
+    k = order[np.repeat(start, counts) + run]
+    y = p[k, 1]
+    xc = v[e, 0] + (y - v[e, 1]) * (w[e, 0] - v[e, 0]) / (w[e, 1] - v[e, 1])
+    hits = np.bincount(k[p[k, 0] < xc], minlength=len(p))
+    return (hits % 2) == 1
 
 
 def signed_area(v: np.ndarray) -> float:
