@@ -15,9 +15,9 @@ error over them (the defaults, DV):
   2e4 / 8e4 nodes;
 
 on the jittered (default), CVT and random meshes. ``falls`` says whether the mean falls
-at every refinement. ``python validation/refinement.py`` (about 26 min on 2 cores, most
-of it generating the CVT meshes of LE1) writes ``refinement.json``; ``--quick``: seeds 0
-and 1 at about 1e3 and 4e3 nodes for every problem.
+at every refinement. ``python validation/refinement.py`` (about 14 min on 2 cores)
+writes ``refinement.json``; ``--quick``: seeds 0 and 1 at about 1e3 and 4e3 nodes for
+every problem.
 """
 
 from __future__ import annotations
