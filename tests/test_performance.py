@@ -121,13 +121,13 @@ def test_distance_beyond_a_reach_is_only_bounded():
     """Points certainly farther than the reach get inf (their exact distance is beyond
     it), every other point its exact distance: the mesher's tests ``d > reach`` come out
     as with every distance computed."""
-    from dvstatic.mesh.generators import _distance_to_boundary
+    from dvstatic.mesh.distance import distance_to_boundary
 
     domain = _ellipse_domain()
     p = np.random.default_rng(3).random((4000, 2)) * (3.3, 2.8)
-    exact = _distance_to_boundary(domain, p)
+    exact = distance_to_boundary(domain, p)
     for reach in (1e-9, 0.02, 0.2, np.full(len(p), 0.05)):
-        d = _distance_to_boundary(domain, p, reach)
+        d = distance_to_boundary(domain, p, reach)
         near = np.isfinite(d)
         np.testing.assert_array_equal(d[near], exact[near])
         assert np.all(exact[~near] > reach if np.ndim(reach) == 0 else exact[~near] > 0.05)
@@ -138,10 +138,10 @@ def test_distance_beyond_a_reach_is_only_bounded():
 def test_cvt_mesh_on_curves_unchanged_by_the_distance_bound(monkeypatch):
     """A CVT mesh of an ellipse domain with a region is the same, to the last bit, with
     every distance computed exactly (the bound switched off)."""
-    from dvstatic.mesh import generators
+    from dvstatic.mesh import distance
 
     domain = _ellipse_domain()
     fast = dv.mesh.generate(domain, 0.08, kind="cvt", seed=4).points
-    monkeypatch.setattr(generators, "_boundary_bound", lambda d, p, reach: np.full(len(p), -1.0))
+    monkeypatch.setattr(distance, "_boundary_bound", lambda d, p, reach: np.full(len(p), -1.0))
     slow = dv.mesh.generate(domain, 0.08, kind="cvt", seed=4).points
     np.testing.assert_array_equal(fast, slow)

@@ -18,13 +18,13 @@ to the boundary, triangles outside the domain removed).
 from __future__ import annotations
 
 import logging
-from functools import lru_cache
 
 import numpy as np
 
 from .._checks import check_choice, check_positive, check_seed
 from ..errors import InputError
 from .core import Mesh
+from .distance import distance_to_boundary
 from .domain import Circle, Domain, Polygon, rectangle_domain
 from .graded import SizeField, check_h, density_points, local_h, min_h, spaced
 from .grid import (
@@ -208,7 +208,7 @@ def _graded(domain: Domain, h: SizeField, kind: str, seed) -> Mesh:
             "kind",
         )
     bnd, seg_a, seg_b = _loop_points(domain.loops, h)
-    inner = density_points(domain, h, rng, lambda p: _distance_to_boundary(domain, p))
+    inner = density_points(domain, h, rng, lambda p: distance_to_boundary(domain, p))
     inner = _gabriel(inner, seg_a, seg_b)
     graded = h.max > h.min * (1.0 + 1e-9)  # a constant field grades nothing
     sampling = Sampling(kind, 0.0, CVT_ITERATIONS, h=h.min, graded=graded)
@@ -418,57 +418,6 @@ def _loop_points(loops, h, grid: Grid | None = None):
     return np.vstack(pts), np.vstack(a_list), np.vstack(b_list)
 
 
-def _distance_to_boundary(domain: Domain, p: np.ndarray, beyond=None) -> np.ndarray:
-    """Distance to the nearest boundary or region curve, shape (n,).
-
-    With ``beyond`` (a length, or one per point) the points that are certainly farther
-    than it get ``inf``: a lower bound of their distance (:func:`_boundary_bound`)
-    exceeds it. Only the others are projected onto the curves (a curve without a
-    closed-form projection, an ellipse, compares every point with 513 of its points),
-    so tests ``d > beyond``, ``d >= beyond`` come out as with every distance."""
-    p = np.asarray(p, dtype=float).reshape(-1, 2)
-    if beyond is None:
-        return _curve_distance(domain, p)
-    d = np.full(len(p), np.inf)
-    near = np.flatnonzero(_boundary_bound(domain, p, np.max(beyond)) <= beyond)
-    if near.size:
-        d[near] = _curve_distance(domain, p[near])
-    return d
-
-
-def _curve_distance(domain: Domain, p: np.ndarray) -> np.ndarray:
-    d, _ = domain.curve_distances(p)
-    d = d.min(axis=1)
-    if domain.regions:
-        d = np.minimum(d, domain.region_distances(p).min(axis=1))
-    return d
-
-
-#: points per curve of the boundary samples that bound the distance from below
-BOUND_SAMPLES = 4096
-
-
-@lru_cache(maxsize=8)
-def _boundary_samples(domain: Domain):
-    """A k-d tree of :data:`BOUND_SAMPLES` points on every boundary and region curve and
-    the longest chord between neighbours: every curve point is within half an arc (at
-    most a chord, for these fine samples) of a sample."""
-    from scipy.spatial import cKDTree
-
-    curves = [c for loop in domain.loops + tuple(domain.regions) for c in loop.pieces()]
-    pts = [c.point(np.linspace(0.0, 1.0, BOUND_SAMPLES + 1)) for c in curves]
-    chord = max(float(np.hypot(*np.diff(x, axis=0).T).max()) for x in pts)
-    return cKDTree(np.vstack(pts)), chord
-
-
-def _boundary_bound(domain: Domain, p: np.ndarray, reach: float) -> np.ndarray:
-    """A lower bound of every point's distance to the boundary and region curves, where
-    it is at most ``reach`` (``inf`` beyond: the search stops there, as it must for
-    speed, the samples lying on lines)."""
-    tree, chord = _boundary_samples(domain)
-    return tree.query(p, distance_upper_bound=float(reach) + chord)[0] - chord
-
-
 def _interior_points(
     domain: Domain, h: float, kind: str, jitter: float, rng, grid: Grid | None = None
 ) -> np.ndarray:
@@ -482,20 +431,20 @@ def _interior_points(
             cand = lo + (hi - lo) * rng.random((2 * (n_target - len(out)) + 16, 2))
             ok = domain.contains(cand)
             cand = cand[ok]
-            cand = cand[_distance_to_boundary(domain, cand, 0.3 * h) >= 0.3 * h]
+            cand = cand[distance_to_boundary(domain, cand, 0.3 * h) >= 0.3 * h]
             out = np.vstack([out, cand])
         return out[:n_target]
     grid = grid or Grid.fitted(lo, hi, h)
     p = grid.points()
     p = p[domain.contains(p)]
-    d = _distance_to_boundary(domain, p, 1.2 * grid.hx)  # (the taper's reach)
+    d = distance_to_boundary(domain, p, 1.2 * grid.hx)  # (the taper's reach)
     keep = d >= 0.45 * grid.hx
     p, d = p[keep], d[keep]
     if kind == "jittered" and jitter > 0 and len(p):
         hx = grid.hx
         taper = np.clip((d - 0.4 * hx) / (0.8 * hx), 0.0, 1.0)
         trial = p + unit_disc(rng, len(p)) * (jitter * hx * taper)[:, None]
-        ok = domain.contains(trial) & (_distance_to_boundary(domain, trial, 0.3 * hx) >= 0.3 * hx)
+        ok = domain.contains(trial) & (distance_to_boundary(domain, trial, 0.3 * hx) >= 0.3 * hx)
         p[ok] = trial[ok]
     return p
 
@@ -523,7 +472,7 @@ def lloyd(domain: Domain, points: np.ndarray, h, iterations: int = CVT_ITERATION
     p = np.array(points, dtype=float)
     hmin = min_h(h)
     density = (lambda x: (hmin / h(x)) ** 4) if isinstance(h, SizeField) else None
-    on_bnd = _distance_to_boundary(domain, p, 1e-9 * hmin) <= 1e-9 * hmin
+    on_bnd = distance_to_boundary(domain, p, 1e-9 * hmin) <= 1e-9 * hmin
     movable = np.flatnonzero(~on_bnd)
     for _ in range(iterations):
         tri = domain.delaunay(p)
@@ -532,7 +481,7 @@ def lloyd(domain: Domain, points: np.ndarray, h, iterations: int = CVT_ITERATION
         idx = movable[ok]
         target = centroid[idx]
         reach = 0.2 * local_h(h, target)
-        far = _distance_to_boundary(domain, target, reach) > reach
+        far = distance_to_boundary(domain, target, reach) > reach
         inside = domain.contains(target) & far
         p[idx[inside]] = target[inside]
     return p
