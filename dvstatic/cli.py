@@ -445,6 +445,7 @@ def _validate(args: argparse.Namespace) -> int:
         d / "stress.py",
         d / "refinement.py",
         d / "fracture.py",
+        d / "biaxial.py",
     ]
     if args.only:
         want = [w.strip() for w in args.only.split(",") if w.strip()]

@@ -321,7 +321,7 @@ def write_fracture_series(folder: str | Path, result, name: str = "fracture") ->
     One ``<name>_NNNN.vtu`` per snapshot (and the final state) in ``folder``, listed
     with their event numbers as times in ``<name>.pvd`` (open that one). Each holds the
     bonds as line cells with ``stiffness`` (1 intact, 0 broken), ``broken`` (0/1),
-    ``mode`` (how a broken bond failed: 0 intact, 1 tension, 2 shear, 3 crushing),
+    ``mode`` (how a broken bond failed: 0 intact, 1 tension, 2 shear, 3 crushing, 4 out-of-plane),
     ``closed`` (1: a cracked face closed, carrying compression) and
     ``strength`` (force), and the nodes with ``displacement`` (at the event's critical
     load), ``damage`` (mean stiffness loss of the node's bonds) and ``stress_virial``

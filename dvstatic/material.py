@@ -86,6 +86,13 @@ class Elastic:
             return self.E, self.nu
         return self.E / (1.0 - self.nu**2), self.nu / (1.0 - self.nu)
 
+    @property
+    def out_of_plane(self) -> float:
+        """``sigma_zz / (sigma_xx + sigma_yy)``: 0 in plane stress, ``nu`` in plane
+        strain (the principal stress normal to the plane that a 3-D strength criterion
+        sees)."""
+        return 0.0 if self.plane == "stress" else self.nu
+
     def stress(self, eps: np.ndarray) -> np.ndarray:
         """In-plane stress of strains (..., 2, 2)."""
         E2, nu2 = self.in_plane

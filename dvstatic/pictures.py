@@ -328,7 +328,12 @@ def crack_faces(result, bonds=None) -> tuple[np.ndarray, np.ndarray]:
 
 
 #: colours of the failure modes in the crack picture
-_MODE_COLOURS = {"tension": "tab:blue", "shear": "tab:green", "crushing": "tab:red"}
+_MODE_COLOURS = {
+    "tension": "tab:blue",
+    "shear": "tab:green",
+    "crushing": "tab:red",
+    "out-of-plane": "tab:purple",
+}
 
 
 def _break_modes(result) -> list[str]:
@@ -341,7 +346,7 @@ def _break_modes(result) -> list[str]:
 def write_crack_png(path: str | Path, result, title: str | None = None) -> Path:
     """The crack pattern of a fracture analysis as a PNG, atomically: the body's
     outline, the Voronoi faces of the broken bonds coloured by the order they broke (by
-    failure mode, tension / shear / crushing, when faces failed other than in
+    failure mode, tension / shear / crushing / out-of-plane, when faces failed other than in
     tension), those of softened (cracked, not yet broken) bonds in grey, or pale in the
     colour of their mode when faces soften in shear; a crack in a small part of the body
     is framed."""

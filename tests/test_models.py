@@ -130,3 +130,33 @@ def test_nu_m_zero_skips_coupling_and_still_matches():
     assert model.nu_m == pytest.approx(0.0, abs=1e-15)
     K = model.stiffness()
     assert abs(K - K.T).max() <= 1e-13 * abs(K).max()
+
+
+def test_method_paper_is_the_four_keywords_of_the_paper(jittered_small):
+    """``method="paper"`` is the paper's model: the same calibration, springs, cells and
+    tensors as the four keywords, kept by ``replaced``; a keyword that contradicts it is
+    refused, naming it."""
+    paper = dv.DV(jittered_small, 1e5, 0.2, method="paper")
+    four = dv.DV(
+        jittered_small,
+        1e5,
+        0.2,
+        calibration="paper",
+        bonds="uniform",
+        boundary_cells="lattice",
+        anisotropy="keep",
+    )
+    assert (paper.calibration, paper.bonds, paper.boundary_cells, paper.anisotropy) == (
+        "paper",
+        "uniform",
+        "lattice",
+        "keep",
+    )
+    assert abs(paper.stiffness() - four.stiffness()).max() == 0.0
+    assert paper.replaced(damage=None).bonds == "uniform"
+    with pytest.raises(dv.InputError) as info:
+        dv.DV(jittered_small, 1e5, 0.2, method="paper", bonds="surface")
+    assert info.value.param == "bonds"
+    with pytest.raises(dv.InputError) as info:
+        dv.DV(jittered_small, 1e5, 0.2, method="exact")
+    assert info.value.param == "method"

@@ -261,3 +261,13 @@ def test_boundary_layer_quick(out):
     # the probe: the package's recovery on such boundary cells, Kirsch's corner
     s = next(r for r in data["stress"] if r["kind"] == "jittered")
     assert abs(s["exact boundary cells"]["hoop_at_top"]) < 0.5 * abs(s["lattice"]["hoop_at_top"])
+
+
+def test_biaxial_quick(out):
+    """validation/biaxial.py --quick: every ratio within 2 % of the 3-D Mohr-Coulomb
+    envelope in plane stress and plane strain, and the same states never fail."""
+    _run("biaxial", out)
+    d = json.loads((out / "biaxial.json").read_text())
+    assert d["worst_vs_3d"] < 0.02 and d["never_agrees"]
+    stress = [r for r in d["rows"] if r["plane"] == "stress" and r["ratio"] > 0]
+    assert all(r["mode"] == "out-of-plane" for r in stress)

@@ -11,12 +11,7 @@ import numpy as np
 OUT = Path(__file__).resolve().parent / "out"
 
 #: the paper's model (the figure scripts reproduce the paper's method, not the defaults)
-PAPER = {
-    "calibration": "paper",
-    "bonds": "uniform",
-    "boundary_cells": "lattice",
-    "anisotropy": "keep",
-}
+PAPER = {"method": "paper"}
 
 # paper exp. 2 (beam) and exp. 3 (uniaxial) material
 E_BEAM, NU_BEAM = 1e5, 0.2

@@ -96,6 +96,14 @@ class FractureOptions:
         scene=False,
     )
     progress: bool = option(False, "show a progress bar of the events (tqdm)", "bool", scene=False)
+    check_stability: bool = option(
+        True,
+        "refuse a lattice whose stiffness with these supports is not positive definite "
+        "(`UnstableError` before the first event, as `dv.solve` does), and stop "
+        "(`stop_reason` `unstable`) where a fresh factorisation of the damaged stiffness "
+        "finds it indefinite; False: break it anyway",
+        "bool",
+    )
 
     def __post_init__(self) -> None:
         check_int("max_events", self.max_events, minimum=1)
@@ -113,8 +121,10 @@ class FractureOptions:
         _fraction("fragment", self.fragment, closed=True)
         if not isinstance(self.contact, bool):
             raise TypeError(f"contact must be True or False, got {self.contact!r}")
-        if not isinstance(self.progress, bool):
-            raise TypeError(f"progress must be True or False, got {self.progress!r}")
+        for name in ("progress", "check_stability"):
+            value = getattr(self, name)
+            if not isinstance(value, bool):
+                raise TypeError(f"{name} must be True or False, got {value!r}")
 
     @classmethod
     def from_kwargs(cls, base: FractureOptions | None = None, **kwargs) -> FractureOptions:

@@ -31,11 +31,13 @@ import time
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, UnstableError
 from ..lattice import VoronoiModel
 from ..lattice.damage import split as _split
 from ..mesh import Mesh
 from ..problem import Problem
+from ..solvers.info import SolveInfo, StabilityCheck
+from ..solvers.linear import unstable_message
 from ..solvers.options import options_docstring
 from .bonds import Bonds, Kept
 from .contact import Contact
@@ -172,6 +174,7 @@ def fracture(
         t_start,
         opts,
         start,
+        problem.supports,
     )
     return dataclasses.replace(
         res,
@@ -363,13 +366,32 @@ class _Analysis(EventSearch):
         self._factors = (d.copy(), closed.copy(), ((w, g), intact))
         return self._factors[2]
 
-    def start(self) -> None:
+    def start(self, supports=()) -> None:
+        """The first state; ``supports`` name the problem in an instability's message.
+
+        Raises
+        ------
+        UnstableError
+            The lattice to be broken is not stable with these supports (the inertia of
+            its factorisation, as ``dv.solve`` checks it; ``check_stability``).
+        """
         # from the undamaged system the criterion's responses factorised, if this run
         # starts undamaged (else that one is freed before the new one is made)
         fac, self.criterion.factorised = self.criterion.factorised, None
         if self.initial is not None:
             fac = None
         self.solver.rebase(*self.factors(), fac)
+        neg = self.solver.negative
+        if neg and self.opts.check_stability:
+            msg = unstable_message(self.model, neg, supports)
+            raise UnstableError(
+                ("the damaged " if self.initial is not None else "")
+                + msg
+                + "; dv.fracture(..., check_stability=False) breaks it anyway",
+                SolveInfo("direct", stability=StabilityCheck(True, "ldl-inertia", neg)),
+                negative_eigenvalues=neg,
+            )
+        self._factored = self.solver.factorisations
         self._solve()
         self.x_last = self.x
         self.k_initial = self.p_ref / self.u_ref
@@ -390,7 +412,7 @@ class _Analysis(EventSearch):
         x = self.x
         e, lam = crit.bond, crit.factor
         if not np.isfinite(lam):
-            return "no_tension", "no unbroken bond is loaded towards its strength"
+            return "no_tension", self.criterion.never_fails(k == 0)
         saved = bonds.save(e)
         cracked, closed = bool(self.contact.cracked[e]), self.contact.closed.copy()
         before = (self.res, self.p_ref, self.u_ref, self.xh, self.p_held, self.u_held)
@@ -461,7 +483,23 @@ class _Analysis(EventSearch):
         )
         if stop is not None and self.fh is not None and lam == 0.0 and stop[0] == "separated":
             stop = (stop[0], "under the held loads alone (load factor 0): " + stop[1])
-        return stop
+        return stop or self._unstable(k)
+
+    def _unstable(self, k: int):
+        """("unstable", message) if a factorisation made since the last check finds the
+        damaged stiffness indefinite (checked at every fresh factorisation: the updates
+        in between are not factorised), else None."""
+        if self.solver.factorisations == self._factored or not self.opts.check_stability:
+            return None
+        self._factored = self.solver.factorisations
+        if not self.solver.negative:
+            return None
+        return "unstable", (
+            f"after event {k} the damaged stiffness is not positive definite "
+            f"({self.solver.negative} negative eigenvalue(s) of a fresh factorisation): "
+            "the damaged lattice is unstable, its states beyond would not be equilibria "
+            "of a physical solid"
+        )
 
     def _released(self, lam: float, u0: np.ndarray, factors0) -> float:
         """With held loads: the energy the event releases with every load and prescribed
@@ -507,7 +545,7 @@ class _Analysis(EventSearch):
 
 
 def _run(
-    model, sp_, criterion, s0, energy, problem, timings, t_start, opts, start=None
+    model, sp_, criterion, s0, energy, problem, timings, t_start, opts, start=None, supports=()
 ) -> FractureResult:
     """The event loop (see :func:`fracture`); Ctrl-C keeps the events so far."""
     run = _Analysis(model, sp_, criterion, s0, energy, problem, opts)
@@ -517,7 +555,7 @@ def _run(
     reason, message = "max_events", f"stopped after max_events = {n} events"
     t0 = time.perf_counter()
     timings["setup"] = t0 - t_start
-    run.start()
+    run.start(supports)
     bar = _bar(opts.progress, n)
     try:
         with _blas_threads(opts.blas_threads):

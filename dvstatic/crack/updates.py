@@ -93,6 +93,8 @@ class UpdatedSolver:
             self.engine = DirectSolver(self.system.A, order=self._order)
         else:  # (its time counts in the strengths' setup)
             self.K0, self.system, self.engine = factorised[1:]
+        #: negative eigenvalues of the base (its LDL inertia: 0 for a stable lattice)
+        self.negative = int(self.engine.negative_pivots or 0)
         self._b0 = self.f - self.K0 @ self.uc  # forces minus the base's prescribed motion
         self._k0_rows = self.K0.tocsr()[self.dofs]  # the base's rows of the prescribed dofs
         self.touched: set[int] = set()

@@ -47,7 +47,18 @@ if TYPE_CHECKING:  # annotations only: scipy is imported where it is used
 
 log = logging.getLogger(__name__)
 
-__all__ = ["DV", "RV", "VoronoiModel", "voronoi_weights", "BONDS", "check_model"]
+__all__ = ["DV", "RV", "VoronoiModel", "voronoi_weights", "BONDS", "METHODS", "check_model"]
+
+#: named presets of the model's keywords (``method=``): the paper's model, kept as the
+#: paper states it whatever the defaults become
+METHODS = {
+    "paper": {
+        "calibration": "paper",
+        "bonds": "uniform",
+        "boundary_cells": "lattice",
+        "anisotropy": "keep",
+    },
+}
 
 
 @dataclass(frozen=True, eq=False)
@@ -93,8 +104,7 @@ class VoronoiModel(TriangleTerms):
         everywhere; ``"voronoi"``: ``k_n w_e`` with ``w_e = sqrt(3) r_e / l_e`` (its
         own Voronoi side). The Voronoi coupling stays per triangle, so the stiffness
         stays symmetric.
-        The paper's model is ``calibration="paper", bonds="uniform",
-        boundary_cells="lattice", anisotropy="keep"``.
+        The paper's model is ``method="paper"``.
     plane : {"stress", "strain"}
         Plane stress, or plane strain: the lattice is calibrated with the effective
         constants ``E* = E / (1 - nu^2)``, ``nu* = nu / (1 - nu)``; the stress recovery
@@ -142,10 +152,18 @@ class VoronoiModel(TriangleTerms):
         holds the choice made, which ``dataclasses.replace`` keeps (pass
         ``anisotropy="auto"`` again with another mesh).
 
+    method : {None, "paper"}
+        A named preset of the four keywords above. ``"paper"``: the paper's model
+        exactly, ``calibration="paper", bonds="uniform", boundary_cells="lattice",
+        anisotropy="keep"`` (:data:`METHODS`), which stays the paper's model whatever
+        later defaults become; a keyword at its default takes the preset's value, one
+        given with another value is refused. None (default): the keywords as given.
+
     Raises
     ------
     InputError
-        E, nu or thickness out of range, unknown calibration, bonds, plane or region.
+        E, nu or thickness out of range, unknown calibration, bonds, plane, region or
+        method, or a keyword that contradicts ``method``.
     CalibrationError
         nu has no calibration on this mesh (raised at construction, except under
         ``mpiexec``, where the distributed engine calibrates from sums over ranks).
@@ -163,6 +181,7 @@ class VoronoiModel(TriangleTerms):
     closed: np.ndarray | None = None
     boundary_cells: str = "exact"
     anisotropy: str = "auto"
+    method: str | None = None
     kind: ClassVar[str] = ""
     barycentric_images: ClassVar[bool] = True
 
@@ -171,6 +190,7 @@ class VoronoiModel(TriangleTerms):
             raise TypeError("use dvstatic.DV or dvstatic.RV")
         if not isinstance(self.mesh, Mesh):
             raise TypeError(f"mesh must be a dvstatic Mesh, got {type(self.mesh).__name__}")
+        self._apply_method()
         material = Elastic(self.E, self.nu, self.plane)
         object.__setattr__(self, "E", material.E)
         object.__setattr__(self, "nu", material.nu)
@@ -195,6 +215,26 @@ class VoronoiModel(TriangleTerms):
             _ = self.micro  # calibrate now: an impossible nu fails at construction
         # under mpiexec the calibration waits: solver="petsc" computes it from sums
         # over each rank's own bonds (set_micro), so no rank needs the global geometry
+
+    def _apply_method(self) -> None:
+        """Set the keywords of :attr:`method`'s preset; refuse one given otherwise (a
+        keyword at its default takes the preset's value; given micro-parameters are
+        kept, as :meth:`replaced` passes them)."""
+        if self.method is None:
+            return
+        check_choice("method", self.method, tuple(METHODS))
+        defaults = {f.name: f.default for f in dataclasses.fields(VoronoiModel)}
+        for name, value in METHODS[self.method].items():
+            given = getattr(self, name)
+            if isinstance(given, (calibration.MicroParameters, tuple)):
+                continue
+            if given not in (value, defaults[name]):
+                raise InputError(
+                    f"{name}={given!r} contradicts method={self.method!r}, which is "
+                    f"{name}={value!r}: drop one of them",
+                    name,
+                )
+            object.__setattr__(self, name, value)
 
     def damaged(self, stiffness: np.ndarray, closed=None) -> VoronoiModel:
         """This lattice with bond stiffness factors ``stiffness`` (n_bonds,; 1 intact, 0

@@ -215,6 +215,14 @@ SCHEMA: dict[str, F] = {
                 default="auto",
                 choices=("auto", "regional", "keep"),
             ),
+            "method": F(
+                "string",
+                "a preset of the four keys above: paper (the paper's model exactly: "
+                "calibration = paper, bonds = uniform, boundary_cells = lattice, "
+                "anisotropy = keep; a key given otherwise is refused). Unset: the keys "
+                "as given",
+                choices=("paper",),
+            ),
         },
     ),
     "supports": F(

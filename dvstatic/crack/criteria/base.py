@@ -39,9 +39,12 @@ TIE = 1e-9
 ROW_SLICE = 20_000
 
 #: failure modes of a bond, by the code :meth:`Criterion.factors` gives: tension (the
-#: normal stress across the face), shear (the Coulomb line, the face not in compression)
-#: and crushing (the Coulomb line, the face in compression)
-MODES = ("tension", "shear", "crushing")
+#: normal stress across the face), shear (the Coulomb line, the face not in compression),
+#: crushing (the Coulomb line, the face in compression) and out-of-plane (the Coulomb
+#: line on a plane through the face's trace inclined out of the plane: the pair of the
+#: face's normal stress and the out-of-plane principal stress, as a continuum
+#: Mohr-Coulomb law sees it in plane stress and plane strain)
+MODES = ("tension", "shear", "crushing", "out-of-plane")
 
 #: criterion name -> class, in the order they were registered
 REGISTRY: dict[str, type[Criterion]] = {}
@@ -130,6 +133,20 @@ class Criterion(ABC):
         that can be critical (:mod:`.screen`). None (the default): every bond, every
         event."""
         return None
+
+    def never_fails(self, first: bool) -> str:
+        """The stop message where no bond reaches its threshold at any load factor
+        (``first``: before any event, so the loading can never fail the lattice)."""
+        what = (
+            "the loading can never fail this lattice: no bond reaches its strength at any "
+            "load factor"
+            if first
+            else "no unbroken bond is loaded towards its strength"
+        )
+        return (
+            f"{what} (criterion {self.name!r} fails faces in tension only; compression "
+            "fails by criterion='mohr-coulomb')"
+        )
 
     def set_parameters(self, model, ftb, factors, **params) -> None:
         """Take the criterion's own strengths (:attr:`parameters`, checked by the

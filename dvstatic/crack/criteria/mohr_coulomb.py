@@ -9,12 +9,15 @@ import numpy as np
 
 from ...errors import InputError
 from ...stress.virial import continuum_stress, strain_operator
-from .base import register
+from .base import MODES, register
 from .ratios import linear_factors
 from .responses import per_bond
 from .stress import Stress
 
-__all__ = ["MohrCoulomb", "MAX_FRICTION_ANGLE", "ucs"]
+__all__ = ["MohrCoulomb", "MAX_FRICTION_ANGLE", "OUT_OF_PLANE", "ucs"]
+
+#: the code of the out-of-plane mode in :data:`~.base.MODES`
+OUT_OF_PLANE = MODES.index("out-of-plane")
 
 #: friction angles (degrees) accepted: [0, MAX_FRICTION_ANGLE)
 MAX_FRICTION_ANGLE = 70.0
@@ -52,8 +55,25 @@ def _angle(value, name: str) -> None:
 class MohrCoulomb(Stress):
     """The face of bond e fails when, with ``sigma_n`` its normal stress (tension > 0)
     and ``tau`` its shear stress, either ``sigma_n = ft`` (the tension cut-off, mode
-    *tension*) or ``|tau| + sigma_n tan(phi) = c`` (Coulomb's line: mode *shear* if the
-    face is not in compression there, *crushing* if it is).
+    *tension*), ``|tau| + sigma_n tan(phi) = c`` (Coulomb's line: mode *shear* if the
+    face is not in compression there, *crushing* if it is), or Coulomb's line is reached
+    on a plane through the face's trace tilted out of the plane (mode *out-of-plane*).
+
+    The out-of-plane test is the continuum's: a plane body has a third principal
+    stress, ``sigma_zz = 0`` in plane stress and ``nu (sigma_xx + sigma_yy)`` in plane
+    strain, and a 3-D Mohr-Coulomb law (as FE codes evaluate it at every point of a
+    plane model) takes the largest and smallest of all three. The planes whose normal
+    lies between the face's normal ``n`` and ``z`` carry the pair ``(sigma_n,
+    sigma_zz)`` with no shear between them, and reach Coulomb's line when
+    ``k+ max(sigma_n, sigma_zz) - k- min(sigma_n, sigma_zz) = c``, ``k+- = (1 +- sin
+    phi) / (2 cos phi)``. Over the faces' directions ``sigma_n`` spans the in-plane
+    principal stresses, so the lattice's faces together reproduce the full 3-D
+    envelope: under biaxial compression in plane stress it fails at the uniaxial
+    strength, on the faces normal to the larger compression, where the in-plane faces
+    alone would strengthen with the lateral stress like confinement and never fail at
+    equal compression. Failing out of plane the face loses its bond (the wedge above the
+    tilted plane slides out of the plane, so the face no longer carries normal stress),
+    softening with ``gf_shear`` along the same measure of its trial stress.
 
     ``sigma_n`` and ``tau`` are the traction of the ``stress`` criterion's unbiased patch
     stress on the face (next to damage, ``sigma_n`` from the bond's own tension, which
@@ -83,17 +103,24 @@ class MohrCoulomb(Stress):
         f = 1.0 if factors is None else factors
         self.ft = ftb * f
         self.c = per_bond(model, cohesion, "cohesion") * f
-        self.tan = np.tan(np.radians(per_bond(model, friction_angle, "friction_angle", _angle)))
+        phi = np.radians(per_bond(model, friction_angle, "friction_angle", _angle))
+        self.tan = np.tan(phi)
+        #: the out-of-plane test's factors k+ and k- (n_bonds,)
+        self.k_plus = (1.0 + np.sin(phi)) / (2.0 * np.cos(phi))
+        self.k_minus = (1.0 - np.sin(phi)) / (2.0 * np.cos(phi))
         self.model = model
         self._faces = _face_average(model)
         self._strain = strain_operator(model.mesh)
+        ratio = np.array([m.out_of_plane for m in model.all_materials])
+        #: sigma_zz / (sigma_xx + sigma_yy) per bond (0 in plane stress)
+        self.zz = self._faces @ ratio[model.material_of_triangle]
 
     # ------------------------------------------------------- faces failed in shear
     def trial(self, x):
         """The face's own elastic trial stress: the continuum law of each triangle
         applied to its P1 strain, averaged (by area) over the bond's triangles. Returns
-        the normal and shear stress on every bond's face and the energy density
-        ``sigma : eps`` there, (n_bonds,) each."""
+        the normal and shear stress on every bond's face, the out-of-plane stress and
+        the energy density ``sigma : eps`` there, (n_bonds,) each."""
         eps = (self._strain @ np.asarray(x).ravel()).reshape(-1, 3)
         sig = continuum_stress(self.model, eps)
         sxx, syy, sxy = sig[:, 0, 0], sig[:, 1, 1], sig[:, 0, 1]
@@ -103,41 +130,62 @@ class MohrCoulomb(Stress):
         nx2, ny2, nxy = n[:, 0] ** 2, n[:, 1] ** 2, n[:, 0] * n[:, 1]
         sn = v[:, 0] * nx2 + v[:, 1] * ny2 + 2 * v[:, 2] * nxy
         tau = v[:, 2] * (nx2 - ny2) + nxy * (v[:, 1] - v[:, 0])
-        return sn, tau, v[:, 3]
+        return sn, tau, self.zz * (v[:, 0] + v[:, 1]), v[:, 3]
 
     def cracked(self, x, modes, sense, elongation=None, bonds=None) -> np.ndarray:
         """Cracked in tension: the elongation times its sense. Failed in shear or
         crushing: Coulomb's measure ``s tau + sigma_n tan(phi)`` of the face's own trial
         stress (:meth:`trial`; ``s`` the sense of the shear as the face failed), which a
-        softening face's strain makes grow as it softens."""
+        softening face's strain makes grow as it softens; out of plane, the
+        out-of-plane measure of the same trial stress (:meth:`out_of_plane`, ``s`` the
+        order of the pair as it failed)."""
         out = super().cracked(x, modes, sense, elongation, bonds)
-        shear = np.asarray(modes) != 0
+        modes = np.asarray(modes)
+        shear = modes != 0
         if np.any(shear):
             sl = slice(None) if bonds is None else bonds
-            sn, tau, _ = (v[sl] for v in self.trial(x))
-            out = np.where(shear, sense * tau + sn * self.tan[sl], out)
+            sn, tau, szz, _ = (v[sl] for v in self.trial(x))
+            sense = np.broadcast_to(sense, sn.shape)
+            oop = self.out_of_plane(sn, szz, sense, bonds)
+            coulomb = sense * tau + sn * self.tan[sl]
+            out = np.where(shear, np.where(modes == OUT_OF_PLANE, oop, coulomb), out)
         return out
+
+    def out_of_plane(self, sn, szz, sense, bonds=None) -> np.ndarray:
+        """The out-of-plane Coulomb measure of the pair ``(sigma_n, sigma_zz)``, linear
+        on either side of their order: ``sense`` +1 where ``sigma_zz >= sigma_n``
+        (``k+ sigma_zz - k- sigma_n``), -1 where not (``k+ sigma_n - k- sigma_zz``);
+        ``bonds``: the bonds the arrays are of (None: all)."""
+        sl = slice(None) if bonds is None else bonds
+        hi, lo = np.where(sense > 0, szz, sn), np.where(sense > 0, sn, szz)
+        return self.k_plus[sl] * hi - self.k_minus[sl] * lo
 
     def crack_measure(self, e: int, mode: int, x, d=None):
         """Cracked in tension: the base's. In shear or crushing: the face's Coulomb
         measure of its trial stress, the sense of its shear, and the stiffness that
         makes ``spring peak^2 / 2`` the continuum's elastic energy in the bond's share
-        of the body (``sigma : eps l_e r_e t / 4``; a crack band one face wide)."""
+        of the body (``sigma : eps l_e r_e t / 4``; a crack band one face wide); out of
+        plane, the out-of-plane measure and the order of its pair."""
         if mode == 0:
             return super().crack_measure(e, mode, x, d)
-        sn, tau, density = (v[e] for v in self.trial(x))
-        sense = 1.0 if tau >= 0 else -1.0
-        peak = sense * tau + sn * self.tan[e]
+        sn, tau, szz, density = (v[e] for v in self.trial(x))
+        if mode == OUT_OF_PLANE:
+            sense = 1.0 if szz >= sn else -1.0
+            peak = float(self.out_of_plane(sn, szz, sense, [e])[0])
+        else:
+            sense = 1.0 if tau >= 0 else -1.0
+            peak = sense * tau + sn * self.tan[e]
         geo = self.model.geometry
         energy = 0.25 * density * geo.length[e] * geo.r[e] * self.model.t
         return float(peak), sense, (2.0 * energy / peak**2 if peak > 0 else 0.0)
 
-    def face(self, x, w, g, intact=None) -> tuple[np.ndarray, np.ndarray]:
-        """Normal and shear stress on every bond's face in state ``x``, (n_bonds,) each
-        (stress units): the unbiased patch stress's traction on the face; next to damage
-        the normal stress the bond's own tension stands for (as the ``stress``
-        criterion, slivers excepted); a bond without a patch takes the normal stress
-        its tension stands for and no shear."""
+    def face(self, x, w, g, intact=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Normal, shear and out-of-plane stress on every bond's face in state ``x``,
+        (n_bonds,) each (stress units): the unbiased patch stress's traction on the
+        face; next to damage the normal stress the bond's own tension stands for (as the
+        ``stress`` criterion, slivers excepted); a bond without a patch takes the normal
+        stress its tension stands for and no shear; ``sigma_zz`` from the patch stress
+        (0 in plane stress)."""
         normal, v, covered, t = self.measure(x, w, g, intact)
         n = self.n
         nx2, ny2, nxy = n[:, 0] ** 2, n[:, 1] ** 2, n[:, 0] * n[:, 1]
@@ -148,15 +196,31 @@ class MohrCoulomb(Stress):
                 sn = np.where(near, normal / self.h_nn, sn)
             sn = np.where(covered, sn, t / self.s_tension * self.ft)
         tau = v[:, 2] * (nx2 - ny2) + nxy * (v[:, 1] - v[:, 0])
-        return sn, tau
+        return sn, tau, self.zz * (v[:, 0] + v[:, 1])
+
+    def never_fails(self, first: bool) -> str:
+        what = (
+            "the loading can never fail this lattice: no face reaches the Mohr-Coulomb "
+            "envelope at any load factor"
+            if first
+            else "no unbroken face is loaded towards the Mohr-Coulomb envelope"
+        )
+        return (
+            f"{what} (the stress stays inside it however large the load: compression "
+            "confined on every side, plane strain's sigma_zz = nu (sigma_xx + sigma_yy) "
+            "included, since Coulomb's line has no cap)"
+        )
 
     def factors(self, xh, xg, w, g, intact, threshold):
-        b, q = self.face(xg, w, g, intact)
-        a, p = (0.0, 0.0) if xh is None else self.face(xh, w, g, intact)
+        b, q, bz = self.face(xg, w, g, intact)
+        a, p, az = (0.0, 0.0, 0.0) if xh is None else self.face(xh, w, g, intact)
         tan = self.tan
         tests = [linear_factors(a, b, self.ft)]  # the cut-off
         for sign in (1.0, -1.0):  # Coulomb's line, either sense of the shear
             tests.append(linear_factors(sign * p + a * tan, sign * q + b * tan, self.c))
+        for sense in (1.0, -1.0):  # out of plane, either order of (sigma_n, sigma_zz)
+            held = self.out_of_plane(a, az, sense)
+            tests.append(linear_factors(held, self.out_of_plane(b, bz, sense), self.c))
         ratio = np.stack([r for r, _ in tests])
         excess = np.stack([x for _, x in tests])
         which = np.argmax(np.where(np.any(excess >= 1.0, axis=0), excess, ratio), axis=0)
@@ -165,4 +229,5 @@ class MohrCoulomb(Stress):
         lam = np.where(x >= 1.0, 0.0, np.divide(1.0, r, out=np.zeros_like(r), where=r > 0))
         compressed = a + lam * b < 0
         mode = np.where(which == 0, 0, np.where(compressed, 2, 1))
+        mode[which >= 3] = OUT_OF_PLANE
         return r, x, mode
