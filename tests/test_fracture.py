@@ -176,9 +176,14 @@ def test_the_stress_criterion_ignores_compression_along_the_face():
     ]
     model = dv.DV(mesh, E=E, nu=NU)
     stress = dv.fracture(model, sup, loads, ft=FT, max_events=1)
-    tension = dv.fracture(model, sup, loads, ft=FT, max_events=1, criterion="tension")
     assert stress.events[0].load_factor == pytest.approx(FT, rel=0.03)
-    assert tension.events[0].load_factor < 0.6 * FT
+    # the bond force breaks a bond at less than 0.6 FT here: refused, naming the default
+    with pytest.raises(dv.InputError, match="criterion='stress'") as info:
+        dv.fracture(model, sup, loads, ft=FT, max_events=1, criterion="bond-tension")
+    assert info.value.param == "criterion"
+    with pytest.raises(dv.InputError, match="bond-tension") as info:
+        dv.fracture(model, sup, loads, ft=FT, max_events=1, criterion="tension")
+    assert info.value.param == "criterion"
 
 
 def test_updates_give_the_same_events_as_refactorising_every_event():
@@ -398,7 +403,7 @@ def test_tension_criterion_breaks_at_ft_under_oblique_stress():
         return n @ sig.T
 
     sup = [dv.Fix(at=(1, 0), y=0), dv.Fix(at=(-1, 0), x=0, y=0)]
-    for criterion in ("tension", "stress"):
+    for criterion in ("bond-tension", "stress"):
         res = dv.fracture(
             dv.DV(mesh, E=E, nu=NU),
             sup,
@@ -579,9 +584,9 @@ def test_a_new_criterion_is_one_registered_class():
     is accepted by dv.fracture and breaks where its thresholds say (here the tension
     criterion at half the strength: the first event at half the load factor)."""
     from dvstatic.crack.criteria import REGISTRY, register
-    from dvstatic.crack.criteria.tension import Tension
+    from dvstatic.crack.criteria.tension import BondTension
 
-    class HalfTension(Tension):
+    class HalfTension(BondTension):
         name = "half-tension"
 
         def thresholds(self, s_tension, ftb, factors):
@@ -591,7 +596,7 @@ def test_a_new_criterion_is_one_registered_class():
     try:
         sup, loads = pulled()
         model = dv.DV(plate(0.1), E=E, nu=NU)
-        full = dv.fracture(model, sup, loads, ft=FT, criterion="tension", max_events=1)
+        full = dv.fracture(model, sup, loads, ft=FT, criterion="bond-tension", max_events=1)
         half = dv.fracture(model, sup, loads, ft=FT, criterion="half-tension", max_events=1)
         e0, e1 = full.events[0], half.events[0]
         assert e1.bond == e0.bond
@@ -628,10 +633,13 @@ def test_the_damaged_lattice_is_a_model():
     snap = res.snapshots[-2]
     d = res.stiffness_at(snap.event)
     assert np.abs(d - snap.stiffness).max() <= 1e-15 and (d < 1).sum() > 3
-    model = res.model  # the lattice that broke: without exact boundary cells
-    assert model.boundary_cells == "lattice"
+    assert res.model is model  # the lattice that broke: the model's own, cells included
+    assert len(model.cell_triangles)
     s = split(model)
     w, g = s.factors(d)
+    cells = np.asarray(model.cell_triangles)
+    hit = cells[np.any(d[mesh.topology.tri_bonds[cells]] < 1, axis=1)]
+    assert len(hit) and np.all(g[hit] == 0.0)  # a cracked cell: plain springs
     K = s.stiffness(mesh, w, g).toarray()
     assert np.abs(model.damaged(d).stiffness().toarray() - K).max() <= 1e-12 * np.abs(K).max()
     sol = res.solution(snap.event)
@@ -640,7 +648,8 @@ def test_the_damaged_lattice_is_a_model():
     # the state as solved: closed cracks (contact) carry compression with their spring
     damaged = model.damaged(snap.stiffness, snap.closed)
     again = dv.solve(damaged, scaled(sup, lam), scaled(loads, lam))
-    np.testing.assert_allclose(sol.stress(), again.stress(), rtol=0, atol=1e-12 * FT)
+    s0, s1 = sol.stress(), again.stress()
+    np.testing.assert_allclose(s0, s1, rtol=0, atol=1e-11 * np.abs(s1).max())
     assert "bonds cracked" in repr(sol.model)
     with pytest.raises(IndexError):
         res.solution(len(res.events))
@@ -714,7 +723,8 @@ def test_the_event_loop_runs_on_one_blas_thread(monkeypatch):
 def test_the_patch_stress_and_elongations_are_the_sums_they_stand_for():
     """The sparse operators of the criterion against the sums written out: a bond's patch
     stress is the area-weighted mean of the triangle stresses at its two end nodes (a
-    triangle at both ends counted twice), its elongation n . (u_j - u_i)."""
+    triangle at both ends counted twice), a surface bond's that of its own triangle, its
+    elongation n . (u_j - u_i)."""
     from dvstatic.crack.criteria import criterion_for
     from dvstatic.lattice.damage import split
 
@@ -735,9 +745,14 @@ def test_the_patch_stress_and_elongations_are_the_sums_they_stand_for():
     n = np.stack([dn[..., 0] ** 2, dn[..., 1] ** 2, dn[..., 0] * dn[..., 1]], axis=2)  # xx, yy, xy
     tri_sig = np.einsum("mk,mkc->mc", f, n)
     a = geo.tri_area * weight
-    for e in rng.choice(mesh.n_bonds, 25, replace=False):
+    picked = rng.choice(mesh.n_bonds, 25, replace=False)
+    assert np.isin(picked, sp_.surface).any() and not np.isin(picked, sp_.surface).all()
+    for e in picked:
         i, j = mesh.topology.bonds[e]
         count = np.isin(mesh.triangles, [i, j]).sum(axis=1)
+        own = np.any(sp_.tri_bonds == e, axis=1)
+        if own.sum() == 1:  # a surface bond: its own triangle
+            count = own.astype(int)
         total = np.sum(count * a)
         expect = (count[:, None] * tri_sig).sum(0) / total if total > 0 else np.zeros(3)
         assert covered[e] == (total > 0)
@@ -754,24 +769,22 @@ def test_the_patch_stress_and_elongations_are_the_sums_they_stand_for():
     np.testing.assert_allclose(crit.softening(u), direct, rtol=1e-12, atol=1e-14)
 
 
-def test_fracture_breaks_the_plain_lattice_at_the_boundary():
-    """Exact boundary cells (the elastic default) have no softening law: kept by their
-    weakest bond they raised Petersson's peak to +46 % (h = 14 mm) and +18 % (CVT, h =
-    10 mm) of the cohesive crack's (validation/fracture.py). dv.fracture breaks the same
-    lattice with boundary_cells="lattice": the same events as that model's own run."""
-    import dataclasses
-
+def test_fracture_breaks_the_lattice_the_solve_solves():
+    """dv.fracture breaks the model itself, exact boundary cells included: the first
+    event's state is dv.solve's elastic solution at its load factor (the plain lattice at
+    the boundary, which fracture broke before, is another solid there: at a bore's wall
+    its first crushed face came 9-12 % early where the model's comes 2-4 %,
+    validation/bore.py)."""
     mesh, sup, loads, _ = disc_problem(0.1)
     model = dv.DV(mesh, E=E, nu=NU)
     assert len(model.cell_triangles) > 0
-    kw = dict(ft=FT, gf=5e-4, max_events=40, stop_load_ratio=0.0)
+    kw = dict(ft=FT, gf=5e-4, max_events=2, stop_load_ratio=0.0, snapshot_every=1)
     res = dv.fracture(model, sup, loads, **kw)
-    plain = dv.fracture(dataclasses.replace(model, boundary_cells="lattice"), sup, loads, **kw)
-    assert res.model.boundary_cells == "lattice" and len(res.events) == 40
-    assert [e.bond for e in res.events] == [e.bond for e in plain.events]
-    np.testing.assert_allclose(
-        [e.load_factor for e in res.events], [e.load_factor for e in plain.events], rtol=1e-12
-    )
+    assert res.model is model
+    sol = dv.solve(model, sup, loads)
+    lam = res.events[0].load_factor
+    scale = lam * np.abs(sol.u).max()
+    np.testing.assert_allclose(res.snapshots[0].u, lam * sol.u, rtol=0, atol=1e-9 * scale)
 
 
 def test_the_responses_factorisation_starts_the_loop_or_is_freed_before_it(monkeypatch):

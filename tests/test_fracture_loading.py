@@ -331,7 +331,7 @@ def test_held_loads_that_tear_the_body_apart_stop_with_a_message():
     "kw, param",
     [
         (dict(cohesion=C), "cohesion"),  # the default criterion takes no cohesion
-        (dict(friction_angle=PHI, criterion="tension"), "friction_angle"),
+        (dict(friction_angle=PHI, criterion="bond-tension"), "friction_angle"),
         (dict(criterion="mohr-coulomb", friction_angle=PHI), "cohesion"),
         (dict(criterion="mohr-coulomb", cohesion=C), "friction_angle"),
         (dict(criterion="mohr-coulomb", cohesion=0.0, friction_angle=PHI), "cohesion"),
@@ -572,7 +572,12 @@ def test_events_under_held_loads_release_energy():
         stop_load_ratio=0.0,
     )
     assert all(e.load_factor == 0.0 for e in res.events)
-    assert res.dissipated > 0 and all(e.released >= -1e-12 for e in res.events)
+    # (a triangle's coupling, dropped or scaled as its bonds soften, need not leave it
+    # softer in every direction: an exact cell losing its term at its first tooth can
+    # release a little negative energy; on Petersson's CVT beam at h = 10 mm 10 of 761
+    # events, 0.13 % of the total, the plain lattice 4 of 682, docs/fracture.md)
+    largest = max(e.released for e in res.events)
+    assert res.dissipated > 0 and all(e.released >= -0.1 * largest for e in res.events)
 
 
 def test_the_scene_takes_gf_shear():
@@ -611,14 +616,13 @@ def test_a_run_with_faces_softening_in_shear_goes_on_with_mohr_coulomb_only():
 
 def test_contact_passes_that_stall_on_a_kink_settle_by_trial(caplog):
     """Uniaxial compression, c = 10, phi = 20, 1,528 nodes: at event 304 the damped Newton
-    passes stalled between two statuses of two crack faces (the damped step ends on a kink
-    of the energy) and kept an inconsistent one after 100 passes; the faces in dispute are
-    now settled by trying their statuses. Every recorded state is consistent. (The
-    sequence was measured on the plain lattice, which dv.fracture breaks.) In plane
-    strain: in plane stress the prism now fails out of plane (sigma_zz = 0 is the
-    largest principal stress) and collapses within 42 events; plane strain's sigma_zz =
-    nu sigma_yy keeps the in-plane faces critical, 407 events."""
-    model = dv.DV(dv.mesh.rectangle(1.0, 2.0, 0.04, kind="cvt", seed=1), E=E, nu=NU, plane="strain")
+    passes once stalled between two statuses of two crack faces (the damped step ends on
+    a kink of the energy) and kept an inconsistent one after 100 passes; the faces in
+    dispute are now settled by trying their statuses. (That sequence, on the plain
+    lattice with the patch stress of every bond's end nodes, no longer occurs as such:
+    the run now stops at its load drop after 75 events, crack faces closing in 57.)
+    Every pass settles and every recorded state is consistent."""
+    model = prism(0.04)
     with caplog.at_level("WARNING", logger="dvstatic.crack"):
         res = compress(
             model,
@@ -628,7 +632,7 @@ def test_contact_passes_that_stall_on_a_kink_settle_by_trial(caplog):
             friction_angle=20.0,
             snapshot_every=1,
         )
-    assert len(res.events) > 304
+    assert len(res.events) > 50 and sum(len(e.closed) > 0 for e in res.events) > 30
     assert "did not settle" not in caplog.text and "kept flipping" not in caplog.text
     _assert_contact_consistent(model, res, res.bond_state["cracked"])
 

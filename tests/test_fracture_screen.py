@@ -10,8 +10,7 @@ import dvstatic as dv
 from dvstatic.crack.criteria import criterion_for
 from dvstatic.crack.criteria import screen as screen_mod
 from dvstatic.crack.criteria.stress import Stress
-from dvstatic.crack.criteria.tension import Tension
-from dvstatic.crack.sla import fracture_model
+from dvstatic.crack.criteria.tension import BondTension
 from dvstatic.lattice.damage import split
 from dvstatic.linalg import DirectSolver, nested_dissection
 
@@ -59,7 +58,7 @@ def same_events(a, b):
 
 # ------------------------------------------------------------------ the pieces
 def test_local_measures_are_the_whole_lattice_sums_to_the_last_bit():
-    model = fracture_model(dv.DV(plate(0.06, kind="cvt"), E=E, nu=NU))
+    model = dv.DV(plate(0.06, kind="cvt"), E=E, nu=NU)
     sp_, geo = split(model), model.geometry
     rng = np.random.default_rng(0)
     u = rng.normal(size=2 * model.mesh.n_points)
@@ -75,7 +74,7 @@ def test_local_measures_are_the_whole_lattice_sums_to_the_last_bit():
     assert np.array_equal(tl, t[bonds])
     assert np.array_equal(sl, s[bonds])
     assert np.array_equal(cl, covered[bonds])
-    for name in ("stress", "tension"):
+    for name in ("stress", "bond-tension"):
         crit = criterion_for(name, model, sp_)
         crit.prepare(model, FT, None, {})
         assert np.array_equal(crit(u, w, g, intact, bonds), crit(u, w, g, intact)[bonds])
@@ -85,12 +84,12 @@ def test_the_lipschitz_bound_holds_for_every_undamaged_bond():
     """|v_e(x + du) - v_e(x)| <= L_e max over the patch of |B_T du|_inf, for random
     changes and the two linear criteria; and the bound is not vacuous (within 50x on a
     random change, its worst case)."""
-    model = fracture_model(dv.DV(plate(0.08, kind="random"), E=E, nu=NU))
+    model = dv.DV(plate(0.08, kind="random"), E=E, nu=NU)
     sp_ = split(model)
     w, g, intact = sp_.w, sp_.g, np.ones(len(sp_.g))
     rng = np.random.default_rng(1)
     at_node = sp_._at_node
-    for name in ("stress", "tension"):
+    for name in ("stress", "bond-tension"):
         crit = criterion_for(name, model, sp_)
         crit.prepare(model, FT, None, {})
         lip = crit.lipschitz()
@@ -107,7 +106,7 @@ def test_the_lipschitz_bound_holds_for_every_undamaged_bond():
 def test_the_block_bound_covers_every_patch():
     """The blocks' bound of a bond's largest elongation change is at least the change
     over its own patch."""
-    model = fracture_model(dv.DV(plate(0.05, kind="cvt"), E=E, nu=NU))
+    model = dv.DV(plate(0.05, kind="cvt"), E=E, nu=NU)
     sp_ = split(model)
     scr = screen_mod.Screen(sp_, model.mesh.points, np.ones(sp_.n_bonds), 1e-9)
     du = np.random.default_rng(2).normal(size=2 * model.mesh.n_points)
@@ -155,11 +154,11 @@ def test_screened_runs_with_held_loads_and_the_tension_criterion(monkeypatch, sc
     kw = dict(ft=FT, gf=5e-4, max_events=30, stop_load_ratio=0.0)
     runs = [
         dict(held=[dv.Traction("top", (0.0, 0.3 * FT)), dv.Traction("bottom", (0.0, -0.3 * FT))]),
-        dict(criterion="tension", weibull=dv.Weibull(12, 0.2, seed=3)),
+        dict(criterion="bond-tension", weibull=dv.Weibull(12, 0.2, seed=3)),
     ]
     fast = [dv.fracture(model, sup, loads, **kw, **run) for run in runs]
     assert all(s.screened > 0.8 * len(a.events) for s, a in zip(screens, fast, strict=True))
-    unscreened(monkeypatch, Stress, Tension)
+    unscreened(monkeypatch, Stress, BondTension)
     for run, a in zip(runs, fast, strict=True):
         same_events(a, dv.fracture(model, sup, loads, **kw, **run))
 
@@ -185,7 +184,7 @@ def test_the_screen_finds_every_near_critical_bond_of_states_far_from_its_refere
 
     monkeypatch.setattr(screen_mod, "REFRESH", 1.0)
     monkeypatch.setattr(screen_mod, "MIN_BONDS", 0)
-    model = fracture_model(dv.DV(plate(0.04, kind="cvt"), E=E, nu=NU))
+    model = dv.DV(plate(0.04, kind="cvt"), E=E, nu=NU)
     sp_ = split(model)
     crit = criterion_for("stress", model, sp_)
     thr, _ = crit.prepare(model, FT, dv.Weibull(12, 0.2, seed=5), {})
@@ -220,14 +219,16 @@ def test_the_screen_finds_every_near_critical_bond_of_states_far_from_its_refere
         near = full >= full.max() * (1 - 1e-3)
         assert np.array_equal(ratio[near], full[near])
         assert _first_of_largest(ratio) == _first_of_largest(full)
-    assert scr.screened >= 15 and TIE < 1e-3
+    # (14 of the 20: a surface bond's measure is its one triangle's, whose bound is
+    # wider than a patch mean's; 15 before)
+    assert scr.screened >= 12 and TIE < 1e-3
 
 
 def test_a_criterion_that_redefines_its_value_is_not_screened(monkeypatch):
     """A subclass of a screened criterion with a value of its own keeps no Lipschitz
     constant made for its parent's value."""
     monkeypatch.setattr(screen_mod, "MIN_BONDS", 0)
-    model = fracture_model(dv.DV(plate(0.1), E=E, nu=NU))
+    model = dv.DV(plate(0.1), E=E, nu=NU)
     sp_ = split(model)
 
     class Squared(Stress):

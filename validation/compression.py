@@ -8,8 +8,11 @@ Prism: E = 2e4, nu = 0.2, ft = 2, c = 6, phi = 30 deg (the continuum's UCS =
 2 c cos(phi) / (1 - sin(phi)) = 20.78), displacement control (the top platen moves
 down), brittle bonds. The load is the platen force over the width: the axial stress.
 Biaxial: the lateral pressure p = 0, 0.1, 0.2, 0.4 UCS is held at full value in every
-state (dv.fracture(..., held=[...])); the envelope says sigma_1 = UCS + p (1 + sin phi)
-/ (1 - sin phi). Every recorded state is re-solved from scratch to check that it is in
+state (dv.fracture(..., held=[...])), in plane strain (sigma_zz = nu (sigma_xx +
+sigma_yy) confines the prism out of its plane too); the envelope says sigma_1 = UCS + p
+(1 + sin phi) / (1 - sin phi). (In plane stress a held lateral pressure does not
+strengthen the prism: it fails out of plane at the UCS, validation/biaxial.py.) Every
+recorded state is re-solved from scratch to check that it is in
 equilibrium with the held pressure at full value.
 """
 
@@ -37,12 +40,14 @@ def platens(mesh, d: float = 1e-3):
     return [dv.Fix("bottom", y=0.0), dv.Fix("top", y=-d), dv.Fix([mid], x=0.0)]
 
 
-def prism_run(h: float, c=C, phi=PHI, p=0.0, seed=1, max_events=4000, per_node=None, **kw):
+def prism_run(
+    h: float, c=C, phi=PHI, p=0.0, seed=1, max_events=4000, per_node=None, plane="stress", **kw
+):
     """One prism: the result, the largest equilibrium error of its snapshots, seconds
     (``per_node``: that many events per node instead of ``max_events``; ``kw`` more
     keywords of dv.fracture)."""
     mesh = dv.mesh.rectangle(1.0, 2.0, h, kind="cvt", seed=seed)
-    model = dv.DV(mesh, E=E, nu=NU)
+    model = dv.DV(mesh, E=E, nu=NU, plane=plane)
     held = [dv.Pressure("left", p), dv.Pressure("right", p)] if p else None
     t0 = time.perf_counter()
     res = dv.fracture(
@@ -114,7 +119,7 @@ def row(res, seconds, c=C, phi=PHI, p=0.0, eq=0.0) -> dict:
 def uniaxial(hs) -> tuple[list, list]:
     rows, results = [], []
     print("uniaxial compression, c = 6, phi = 30 deg (UCS 20.78)")
-    print("   nodes  first   mode      peak   peak/UCS events  tension shear crushing")
+    print("   nodes  first   mode      peak   peak/UCS events  tension shear crushing out-of-plane")
     for h in hs:
         res, _, s = prism_run(h)
         r = row(res, s)
@@ -124,7 +129,7 @@ def uniaxial(hs) -> tuple[list, list]:
         print(
             f"  {r['nodes']:6d} {r['first']:6.2f}  {r['first_mode']:8s} {r['peak']:6.2f}  "
             f"{r['peak_over_envelope']:7.3f}  {r['events']:5d}  {m['tension']:6d} "
-            f"{m['shear']:5d} {m['crushing']:7d}   ({s:.1f} s)"
+            f"{m['shear']:5d} {m['crushing']:7d} {m['out-of-plane']:7d}   ({s:.1f} s)"
         )
     return rows, results
 
@@ -248,11 +253,11 @@ def pairs(h) -> list:
 def biaxial(h) -> dict:
     strength = ucs(C, PHI)
     rows = []
-    print("biaxial compression, held lateral pressure p")
+    print("biaxial compression, held lateral pressure p (plane strain)")
     print("   p/UCS     p   envelope   first    peak  peak/env  held equilibrium")
     for frac in (0.0, 0.1, 0.2, 0.4):
         p = frac * strength
-        res, eq, s = prism_run(h, p=p)
+        res, eq, s = prism_run(h, p=p, plane="strain")
         r = row(res, s, p=p, eq=eq)
         rows.append(r)
         print(
@@ -362,7 +367,9 @@ def tunnel_onset(K: float, h_near: float, L: float = TUNNEL["L"]) -> dict:
 def convergence_confinement(p0_over_ucs: float, h_near: float) -> dict:
     """K = 1: the in-situ stress p0 and a support pressure p0 in the tunnel held; the
     support pressure released by the load factor (lambda = 1: a free wall). Lame: the
-    wall fails when (1 + lambda) p0 = UCS + k (1 - lambda) p0."""
+    wall fails when (1 + lambda) p0 = UCS + k (1 - lambda) p0 in the plane; in plane
+    stress sigma_zz = 0 is the largest principal stress, so out of the plane it fails
+    first, when (1 + lambda) p0 = UCS (``lambda_3d``)."""
     t = TUNNEL
     strength = ucs(t["c"], t["phi"])
     p0 = p0_over_ucs * strength
@@ -382,11 +389,13 @@ def convergence_confinement(p0_over_ucs: float, h_near: float) -> dict:
     )
     lam = np.array([e.load_factor for e in res.events])
     lame = (strength + (k - 1) * p0) / ((1 + k) * p0)
+    lame_3d = min(lame, strength / p0 - 1.0)
     out = {
         "p0": p0,
         "nodes": model.mesh.n_points,
         "lambda_first": float(lam[0]),
         "lambda_lame": float(lame),
+        "lambda_3d": float(lame_3d),
         "mode_first": res.events[0].mode,
         "events": len(res.events),
         "events_below_full_release": int(np.sum(lam <= 1.0)),
@@ -395,7 +404,8 @@ def convergence_confinement(p0_over_ucs: float, h_near: float) -> dict:
     }
     print(
         f"  released support, K = 1, p0 = {p0_over_ucs:g} UCS: first failure at lambda = "
-        f"{lam[0]:.3f} ({res.events[0].mode}; Lame {lame:.3f}, {lam[0] / lame - 1:+.1%}); "
+        f"{lam[0]:.3f} ({res.events[0].mode}; Lame in the plane {lame:.3f}, with sigma_zz "
+        f"{lame_3d:.3f}, {lam[0] / lame_3d - 1:+.1%}); "
         f"{out['events_below_full_release']} of {len(lam)} events at lambda <= 1; held "
         f"equilibrium {out['held_equilibrium']:.1e}; stopped: {res.message}"
     )
@@ -460,11 +470,13 @@ def beam_self_weight(h: float) -> dict:
     return out, res
 
 
-def brazilian_mc(h: float) -> dict:
+def brazilian_mc(h: float, ratio: float = 20.0) -> dict:
     """The Brazilian disc (fracture.py's set-up, ft = 3) with Mohr-Coulomb, c such that
-    UCS = 10 ft (phi = 30 deg)."""
+    UCS = ``ratio`` ft (phi = 30 deg). In plane stress the strips' contact pressure is
+    pi / 0.2 = 15.7 times the splitting stress, uniaxial out of the plane: with UCS = 10 ft
+    the material under the strips crushes (out of plane) before the disc splits."""
     phi = 30.0
-    c = 10 * 3.0 * (1 - np.sin(np.radians(phi))) / (2 * np.cos(np.radians(phi)))
+    c = ratio * 3.0 * (1 - np.sin(np.radians(phi))) / (2 * np.cos(np.radians(phi)))
     t0 = time.perf_counter()
     res, p_strip = brazilian(
         h,
@@ -480,16 +492,17 @@ def brazilian_mc(h: float) -> dict:
     mid = mesh.points[mesh.topology.bonds[res.broken]].mean(axis=1)
     out = {
         "nodes": mesh.n_points,
+        "ucs_over_ft": ratio,
         "cohesion": c,
         "phi": phi,
         "splitting_over_ft": 2 * res.peak.load_factor * p_strip / (np.pi * 2.0) / 3.0,
-        "near_diameter": float(np.mean(np.abs(mid[:, 0]) < 0.2)),
+        "near_diameter": float(np.mean(np.abs(mid[:, 0]) < 0.2)) if len(mid) else 0.0,
         "modes": res.to_dict()["modes"],
         "events": len(res.events),
         "seconds": time.perf_counter() - t0,
     }
     print(
-        f"Brazilian disc, Mohr-Coulomb (c = {c:.2f}, phi = 30, UCS = 10 ft; "
+        f"Brazilian disc, Mohr-Coulomb (c = {c:.2f}, phi = 30, UCS = {ratio:g} ft; "
         f"{out['nodes']} nodes): 2P/(pi D t) at the peak {out['splitting_over_ft']:.3f} ft, "
         f"{100 * out['near_diameter']:.0f} % of broken bonds within 0.1 D of the diameter, "
         f"modes {out['modes']}"
@@ -510,7 +523,12 @@ def plot(results, bz, path) -> None:
         ax.add_collection(LineCollection(x[mesh.boundary_edges], colors="k", linewidths=0.8))
         faces = crack_faces(res)[0]
         modes = {e.bond: e.mode for e in res.events}
-        colour = {"tension": "tab:blue", "shear": "tab:green", "crushing": "tab:red"}
+        colour = {
+            "tension": "tab:blue",
+            "shear": "tab:green",
+            "crushing": "tab:red",
+            "out-of-plane": "tab:purple",
+        }
         ax.add_collection(
             LineCollection(
                 faces, colors=[colour[modes[int(b)]] for b in res.broken], linewidths=1.2
@@ -550,6 +568,7 @@ def main(argv=None) -> int:
     plot_softening(data["softening"], soft, args.out / "compression_softening.png")
     data["biaxial"] = biaxial(hs[0])
     data["brazilian"], _ = brazilian_mc(0.08 if args.quick else 0.04)
+    data["brazilian_ucs10"], _ = brazilian_mc(0.08 if args.quick else 0.04, 10.0)
     h_near = 0.08 if args.quick else 0.04
     print("tunnel under in-situ stress (square block 16 x 16, radius 1)")
     data["tunnel"] = [tunnel_onset(K, h_near) for K in (0.2, 1.0)]

@@ -18,6 +18,7 @@ from .._checks import check_choice, check_int, check_positive, check_real
 from ..errors import InputError
 from ..solvers.options import option
 from .criteria import CRITERIA, REGISTRY
+from .criteria.tension import RENAMED
 
 __all__ = ["FractureOptions", "MAX_RANK"]
 
@@ -34,10 +35,12 @@ class FractureOptions:
         "stress",
         "what an intact bond compares with its strength: `stress`, the normal stress across "
         "its Voronoi face (a Rankine criterion, unaffected by compression along the face); "
-        "`tension`, its tension (which compression along the face raises: under tension "
-        "`s` and compression `3 s` it cracks at about `ft / 2.6`); or `mohr-coulomb`, "
-        "Coulomb's line `|tau| + sigma_n tan(phi) = c` with the tension cut-off `ft` on the "
-        "face (needs `cohesion` and `friction_angle`)",
+        "`mohr-coulomb`, Coulomb's line `|tau| + sigma_n tan(phi) = c` with the tension "
+        "cut-off `ft` on the face and on the planes tilted out of the plane through it (the "
+        "3-D envelope with the out-of-plane principal stress; needs `cohesion` and "
+        "`friction_angle`); or `bond-tension`, the bond's force (which compression along "
+        "the face raises: under tension `s` and compression `3 s` it cracks at about "
+        "`ft / 2.6`), refused where its first event comes 5 % before the face stress's",
         "string",
         CRITERIA,
     )
@@ -107,6 +110,8 @@ class FractureOptions:
 
     def __post_init__(self) -> None:
         check_int("max_events", self.max_events, minimum=1)
+        if self.criterion in RENAMED and self.criterion not in REGISTRY:
+            raise InputError(RENAMED[self.criterion], "criterion")
         check_choice("criterion", self.criterion, tuple(REGISTRY))  # with any registered since
         check_int("teeth", self.teeth, minimum=2, maximum=1000)
         check_int("max_rank", self.max_rank, minimum=0, maximum=MAX_RANK)

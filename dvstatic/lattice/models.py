@@ -36,7 +36,7 @@ from .cells import BOUNDARY_CELLS, cell_tensors
 from .flags import model_flags
 from .inputs import checked_damage, checked_materials
 from .isotropy import ANISOTROPY, resolve_anisotropy
-from .operator import RESIDUAL, LatticeOperator
+from .operator import RESIDUAL, LatticeOperator, coupling_factor
 from .stabilise import clip_coupling, triangle_modes, triangle_tensors
 from .terms import TriangleTerms
 from .weights import BONDS, bond_weights, mixed_springs, resolve_bonds, voronoi_weights
@@ -123,7 +123,9 @@ class VoronoiModel(TriangleTerms):
     damage : ndarray, shape (n_bonds,), optional
         Bond stiffness factors in [0, 1] (1 intact, 0 broken) of a cracked lattice, as
         :func:`dvstatic.fracture` leaves it (use :meth:`damaged`): each spring times its
-        factor, each triangle's coupling times the smallest factor of its bonds.
+        factor, each triangle's coupling times the smallest factor of its bonds (an
+        exact cell's or regionally corrected triangle's dropped at its first damaged
+        bond: :func:`~dvstatic.lattice.operator.coupling_factor`).
     closed : ndarray of bool, shape (n_bonds,), optional
         With ``damage``: cracked bonds whose faces are closed (in contact), which carry
         compression with their whole spring (their triangles' coupling stays off).
@@ -241,7 +243,8 @@ class VoronoiModel(TriangleTerms):
         broken), as :func:`dvstatic.fracture` leaves it: the same calibration, each
         bond's spring times its factor (a broken bond keeps
         :data:`~dvstatic.lattice.damage.RESIDUAL` of it), and a triangle's coupling
-        times the smallest factor of its bonds (:mod:`dvstatic.lattice.damage`); the
+        times the smallest factor of its bonds (a cell's dropped at its first damaged
+        bond; :mod:`dvstatic.lattice.damage`); the
         ``closed`` cracks (bool, n_bonds) with their whole spring. A model like any
         other: ``dv.solve``, ``Solution.stress()`` and the writers take it."""
         return self.replaced(damage=stiffness, closed=closed)
@@ -445,7 +448,11 @@ class VoronoiModel(TriangleTerms):
             spring = spring * np.maximum(d, RESIDUAL)
             if self.closed is not None:
                 spring = np.where(self.closed, spring / np.maximum(d, RESIDUAL), spring)
-            low = np.min(d[self.mesh.topology.tri_bonds], axis=1)
+            terms = None
+            if cells is not None:
+                terms = np.zeros(self.mesh.n_triangles, dtype=bool)
+                terms[cells] = True
+            low = coupling_factor(d[self.mesh.topology.tri_bonds], terms)
             coupling = coupling * low
             if dq is not None:
                 dq = dq * low[cells, None, None]

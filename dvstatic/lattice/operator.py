@@ -44,7 +44,7 @@ if TYPE_CHECKING:  # annotations only: scipy is imported where it is used
 
 log = logging.getLogger(__name__)
 
-__all__ = ["LatticeOperator", "scatter_bond_forces", "virial_sum", "CHUNK"]
+__all__ = ["LatticeOperator", "scatter_bond_forces", "virial_sum", "coupling_factor", "CHUNK"]
 
 CHUNK = 1 << 18  # triangles per assembly chunk (bounds temporary memory)
 
@@ -346,3 +346,17 @@ class LatticeOperator:
         strain = self.check_strain(strain)
         t, _, _ = self.bond_state(u, strain)
         return self.assemble(u, strain, t)
+
+
+def coupling_factor(d_tri: np.ndarray, terms=None, sl=slice(None)) -> np.ndarray:
+    """The factor (k,) on the coupling of triangles whose bonds have stiffness factors
+    ``d_tri`` (k, 3): their weakest bond's factor, and 0 from the first damaged bond on
+    where the coupling holds an exact cell's or the regional isotropy's term (``terms``,
+    (M,) bool, rows ``sl``): those terms make the intact triangle exactly P1 and have no
+    softening law, so a damaged one is a set of plain springs (kept in proportion to the
+    weakest bond, a cell carried the face across the crack while the bond's saw-tooth
+    released it: Petersson's beam 1.244 kN at h = 14 mm against the cohesive 0.853)."""
+    low = np.min(d_tri, axis=1)
+    if terms is None:
+        return low
+    return np.where(terms[sl] & (low < 1.0), 0.0, low)

@@ -1,7 +1,8 @@
 """Breaking criteria of :func:`dvstatic.fracture`, behind one protocol
 (:class:`~.base.Criterion`) and a registry: ``stress`` (the default, Rankine on the
-bond's face), ``tension`` (the bond's tension) and ``mohr-coulomb`` (Coulomb's line with
-a tension cut-off on the face)."""
+bond's face), ``mohr-coulomb`` (Coulomb's line with a tension cut-off on the face and
+the out-of-plane planes through it) and ``bond-tension`` (the bond's force, refused where
+it is known to be wrong)."""
 
 from . import mohr_coulomb, stress, tension  # noqa: F401  (they register themselves)
 from .base import MODES, REGISTRY, Criterion, Critical, criterion_for, register

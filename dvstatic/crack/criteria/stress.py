@@ -17,8 +17,10 @@ class Stress(Criterion):
 
     Away from damage, ``H_nn sigma_nn``, the normal stress across the face times the
     bond's tension per unit normal stress ``H_nn``. ``sigma`` is the mean stress of the
-    triangles at the bond's two end nodes, corrected by the inverse of that patch's
-    response to uniform stress (so that it is exact under any uniform stress). Next to
+    triangles at the bond's two end nodes (a surface bond's: its own triangle,
+    :meth:`~dvstatic.lattice.damage.TriangleSplit.criterion_total`), corrected by the
+    inverse of that patch's response to uniform stress (so that it is exact under any
+    uniform stress). Next to
     damage (in a damaged triangle), the bond's own tension without the part that stress
     along its face causes, ``T_e - (H_e : sigma - H_nn sigma_nn)``: the tension resolves
     the stress concentration at a crack tip that a patch mean would smear, and damaged
@@ -65,9 +67,9 @@ class Stress(Criterion):
         the patch mean of ``|V_T diag(l_T) Q_T|_inf``; a tension at most the patch sum
         of ``|Q_T|_inf``."""
         sp_ = self.sp
-        total = sp_.patch_total(self.area)
+        total = sp_.criterion_total(self.area)
         covered = total > 0
-        mean = sp_.patch_total(sp_.q_norms(sp_.w, sp_.g, self.length)) / np.where(
+        mean = sp_.criterion_total(sp_.q_norms(sp_.w, sp_.g, self.length)) / np.where(
             covered, total, 1.0
         )
         normal = np.abs(self._a_normal).sum(axis=1) * mean
