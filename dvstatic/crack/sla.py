@@ -50,6 +50,7 @@ from .options import FractureOptions
 from .pieces import Pieces, bond_triangles
 from .result import Event, FractureResult, FractureStats, FractureTimings, Snapshot
 from .search import EventSearch
+from .stops import stop_after
 from .strength import Weibull
 from .updates import UpdatedSolver
 
@@ -59,8 +60,6 @@ __all__ = ["fracture", "EQUILIBRIUM_TOL"]
 
 #: relative residual every recorded state must reach
 EQUILIBRIUM_TOL = 1e-10
-#: secant stiffness (relative to the initial one) below which the body is a mechanism
-MECHANISM = 1e-6
 
 
 def _state(solver, w, g, control, ref, f, fh=None):
@@ -355,13 +354,8 @@ class _Analysis(EventSearch):
 
     def start(self, supports=()) -> None:
         """The first state; ``supports`` name the problem in an instability's message.
-
-        Raises
-        ------
-        UnstableError
-            The lattice to be broken is not stable with these supports (the inertia of
-            its factorisation, as ``dv.solve`` checks it; ``check_stability``).
-        """
+        Raises UnstableError where the lattice is not stable with these supports (its
+        factorisation's inertia, as ``dv.solve`` checks it; ``check_stability``)."""
         # from the undamaged system the criterion's responses factorised, if this run
         # starts undamaged (else that one is freed before the new one is made)
         fac, self.criterion.factorised = self.criterion.factorised, None
@@ -455,7 +449,7 @@ class _Analysis(EventSearch):
         snap = Snapshot(k, self.x_last.reshape(-1, 2), saved[0], closed if closed.any() else None)
         self.snaps.add(snap, ev.load > self.peak)
         self.peak = max(self.peak, ev.load)
-        stop = _stop(
+        stop = stop_after(
             self.pieces,
             self.solved,
             removed,
@@ -592,27 +586,6 @@ def _blas_threads(threads: int | None):
     from threadpoolctl import threadpool_limits
 
     return threadpool_limits(limits=threads, user_api="blas")
-
-
-def _stop(pieces, d, removed, ends, model, ev, peak, res, ratio, k, stiffness):
-    """(reason, message) if the analysis must stop after this event, else None."""
-    if removed:
-        msg = pieces.hanging(d, ends, model.operator.spring) or pieces.check(d)
-        if msg is not None:
-            return "separated", msg
-    if not stiffness > MECHANISM:
-        return "separated", (
-            f"after event {k} the secant stiffness is {stiffness:.1e} of the initial one: "
-            "the body hangs on broken or nearly broken bonds (a mechanism)"
-        )
-    if ratio and peak > 0 and ev.load < ratio * peak:
-        return "load_drop", f"the load fell below {ratio:g} of the peak {peak:.6g}"
-    if not np.isfinite(res) or res > 1e-6:
-        return "separated", (
-            f"the damaged stiffness became singular at event {k} (relative residual "
-            f"{res:.2e}): the body has come apart"
-        )
-    return None
 
 
 def _bar(progress: bool, total: int):

@@ -10,7 +10,52 @@ import numpy as np
 from ..errors import InputError
 from ..material import Elastic
 
-__all__ = ["checked_materials", "checked_damage"]
+__all__ = ["checked_materials", "checked_damage", "preset_keywords", "METHODS"]
+
+#: named presets of the model's keywords (``method=``): the paper's model, kept as the
+#: paper states it whatever the defaults become
+METHODS = {
+    "paper": {
+        "calibration": "paper",
+        "bonds": "uniform",
+        "boundary_cells": "lattice",
+        "anisotropy": "keep",
+    },
+}
+
+
+def preset_keywords(model) -> dict:
+    """The keywords ``model.method``'s preset sets ({} without one). A keyword at its
+    default takes the preset's value; one given otherwise is refused; given
+    micro-parameters are kept (as ``replaced`` passes them).
+
+    Raises
+    ------
+    InputError
+        An unknown method, or a keyword that contradicts it.
+    """
+    import dataclasses
+
+    from .._checks import check_choice
+    from .calibration import MicroParameters
+
+    if model.method is None:
+        return {}
+    check_choice("method", model.method, tuple(METHODS))
+    defaults = {f.name: f.default for f in dataclasses.fields(model)}
+    out = {}
+    for name, value in METHODS[model.method].items():
+        given = getattr(model, name)
+        if isinstance(given, (MicroParameters, tuple)):
+            continue
+        if given not in (value, defaults[name]):
+            raise InputError(
+                f"{name}={given!r} contradicts method={model.method!r}, which is "
+                f"{name}={value!r}: drop one of them",
+                name,
+            )
+        out[name] = value
+    return out
 
 
 def checked_materials(materials, model) -> dict[str, Elastic]:

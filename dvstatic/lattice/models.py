@@ -34,7 +34,7 @@ from . import calibration
 from . import geometry as _geometry
 from .cells import BOUNDARY_CELLS, cell_tensors
 from .flags import model_flags
-from .inputs import checked_damage, checked_materials
+from .inputs import METHODS, checked_damage, checked_materials, preset_keywords
 from .isotropy import ANISOTROPY, resolve_anisotropy
 from .operator import RESIDUAL, LatticeOperator, coupling_factor
 from .stabilise import clip_coupling, triangle_modes, triangle_tensors
@@ -48,17 +48,6 @@ if TYPE_CHECKING:  # annotations only: scipy is imported where it is used
 log = logging.getLogger(__name__)
 
 __all__ = ["DV", "RV", "VoronoiModel", "voronoi_weights", "BONDS", "METHODS", "check_model"]
-
-#: named presets of the model's keywords (``method=``): the paper's model, kept as the
-#: paper states it whatever the defaults become
-METHODS = {
-    "paper": {
-        "calibration": "paper",
-        "bonds": "uniform",
-        "boundary_cells": "lattice",
-        "anisotropy": "keep",
-    },
-}
 
 
 @dataclass(frozen=True, eq=False)
@@ -192,7 +181,8 @@ class VoronoiModel(TriangleTerms):
             raise TypeError("use dvstatic.DV or dvstatic.RV")
         if not isinstance(self.mesh, Mesh):
             raise TypeError(f"mesh must be a dvstatic Mesh, got {type(self.mesh).__name__}")
-        self._apply_method()
+        for name, value in preset_keywords(self).items():
+            object.__setattr__(self, name, value)
         material = Elastic(self.E, self.nu, self.plane)
         object.__setattr__(self, "E", material.E)
         object.__setattr__(self, "nu", material.nu)
@@ -217,26 +207,6 @@ class VoronoiModel(TriangleTerms):
             _ = self.micro  # calibrate now: an impossible nu fails at construction
         # under mpiexec the calibration waits: solver="petsc" computes it from sums
         # over each rank's own bonds (set_micro), so no rank needs the global geometry
-
-    def _apply_method(self) -> None:
-        """Set the keywords of :attr:`method`'s preset; refuse one given otherwise (a
-        keyword at its default takes the preset's value; given micro-parameters are
-        kept, as :meth:`replaced` passes them)."""
-        if self.method is None:
-            return
-        check_choice("method", self.method, tuple(METHODS))
-        defaults = {f.name: f.default for f in dataclasses.fields(VoronoiModel)}
-        for name, value in METHODS[self.method].items():
-            given = getattr(self, name)
-            if isinstance(given, (calibration.MicroParameters, tuple)):
-                continue
-            if given not in (value, defaults[name]):
-                raise InputError(
-                    f"{name}={given!r} contradicts method={self.method!r}, which is "
-                    f"{name}={value!r}: drop one of them",
-                    name,
-                )
-            object.__setattr__(self, name, value)
 
     def damaged(self, stiffness: np.ndarray, closed=None) -> VoronoiModel:
         """This lattice with bond stiffness factors ``stiffness`` (n_bonds,; 1 intact, 0
