@@ -35,7 +35,7 @@ import numpy as np
 from . import assembly
 from . import geometry as _geometry
 from .kinematics import edge_frames, elongation_gradients
-from .operator import RESIDUAL, coupling_factor
+from .operator import RESIDUAL, coupling_factor, term_mask
 from .stabilise import coupling_matrices
 
 if TYPE_CHECKING:
@@ -392,14 +392,11 @@ def split(model: VoronoiModel) -> TriangleSplit:
     w = geo.tri_weight * op.spring[tb]
     g = np.array(op.coupling, dtype=float)
     m = coupling_matrices(mesh, model.barycentric_images)
-    terms = None
     if op.cells is not None:  # exact cells: g M + dQ, as one coupling of scale mean(w)
         c = op.cells
         scale = w[c].mean(axis=1)
         m[c] = (g[c, None, None] * m[c] + op.cell_dq) / scale[:, None, None]
         g[c] = scale
-        terms = np.zeros(len(tri), dtype=bool)
-        terms[c] = True
     return TriangleSplit(
         tri_bonds=tb,
         b=elongation_gradients(n),
@@ -408,5 +405,5 @@ def split(model: VoronoiModel) -> TriangleSplit:
         m=m,
         dofs=dofs,
         ends=mesh.topology.bonds,
-        terms=terms,
+        terms=term_mask(op.cells, len(tri)),
     )

@@ -36,7 +36,7 @@ from .cells import BOUNDARY_CELLS, cell_tensors
 from .flags import model_flags
 from .inputs import METHODS, checked_damage, checked_materials, preset_keywords
 from .isotropy import ANISOTROPY, resolve_anisotropy
-from .operator import RESIDUAL, LatticeOperator, coupling_factor
+from .operator import RESIDUAL, LatticeOperator, coupling_factor, term_mask
 from .stabilise import clip_coupling, triangle_modes, triangle_tensors
 from .terms import TriangleTerms
 from .weights import BONDS, bond_weights, mixed_springs, resolve_bonds, voronoi_weights
@@ -418,10 +418,7 @@ class VoronoiModel(TriangleTerms):
             spring = spring * np.maximum(d, RESIDUAL)
             if self.closed is not None:
                 spring = np.where(self.closed, spring / np.maximum(d, RESIDUAL), spring)
-            terms = None
-            if cells is not None:
-                terms = np.zeros(self.mesh.n_triangles, dtype=bool)
-                terms[cells] = True
+            terms = term_mask(cells, self.mesh.n_triangles)
             low = coupling_factor(d[self.mesh.topology.tri_bonds], terms)
             coupling = coupling * low
             if dq is not None:

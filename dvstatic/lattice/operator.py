@@ -44,7 +44,14 @@ if TYPE_CHECKING:  # annotations only: scipy is imported where it is used
 
 log = logging.getLogger(__name__)
 
-__all__ = ["LatticeOperator", "scatter_bond_forces", "virial_sum", "coupling_factor", "CHUNK"]
+__all__ = [
+    "LatticeOperator",
+    "scatter_bond_forces",
+    "virial_sum",
+    "coupling_factor",
+    "term_mask",
+    "CHUNK",
+]
 
 CHUNK = 1 << 18  # triangles per assembly chunk (bounds temporary memory)
 
@@ -360,3 +367,13 @@ def coupling_factor(d_tri: np.ndarray, terms=None, sl=slice(None)) -> np.ndarray
     if terms is None:
         return low
     return np.where(terms[sl] & (low < 1.0), 0.0, low)
+
+
+def term_mask(cells, n_triangles: int) -> np.ndarray | None:
+    """(M,) bool: the triangles ``cells`` (int array, or None: no term) whose coupling
+    holds a term with no softening law, for :func:`coupling_factor`."""
+    if cells is None:
+        return None
+    out = np.zeros(n_triangles, dtype=bool)
+    out[cells] = True
+    return out
